@@ -1,0 +1,69 @@
+"""The estimated LRP fingerprint: what positioning consumes."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Fingerprint:
+    """Unordered distances to the reflectors, per reflector type, in one frame.
+
+    All per-type entries are tuples indexed like ``type_names``; each holds a 1-D array with
+    one element per distance reported for that type (possibly fewer or more than the
+    reflectors of the type), sorted ascending.
+
+    Attributes
+    ----------
+    type_names : tuple of str
+    distances_m : tuple of ndarray
+        Smoothed (or raw) distances.
+    variances_m2 : tuple of ndarray
+        Their variances.
+    fresh : tuple of ndarray of bool
+        True where the distance was updated by a detection in this frame; False where the
+        track is coasting on its prediction.
+    """
+
+    type_names: tuple[str, ...]
+    distances_m: tuple[np.ndarray, ...]
+    variances_m2: tuple[np.ndarray, ...]
+    fresh: tuple[np.ndarray, ...]
+
+    @classmethod
+    def from_distances(
+        cls, type_names: tuple[str, ...], distances_m, std_m: float = 0.075
+    ) -> Fingerprint:
+        """A fingerprint of exact (e.g. true) distances with a common standard deviation."""
+        d = tuple(np.sort(np.asarray(x, dtype=float).reshape(-1)) for x in distances_m)
+        return cls(
+            tuple(type_names),
+            d,
+            tuple(np.full(len(x), std_m**2) for x in d),
+            tuple(np.ones(len(x), dtype=bool) for x in d),
+        )
+
+    @classmethod
+    def from_true(cls, layout, radar_position_m: np.ndarray, std_m: float = 0.075) -> Fingerprint:
+        """The exact fingerprint of a radar position for a :class:`ReflectorLayout`."""
+        dist = layout.distances_m(np.asarray(radar_position_m, dtype=float))
+        return cls.from_distances(
+            layout.type_names,
+            [dist[layout.type_index == t] for t in range(len(layout.types))],
+            std_m,
+        )
+
+    @property
+    def count(self) -> int:
+        return int(sum(len(d) for d in self.distances_m))
+
+    def fresh_only(self) -> Fingerprint:
+        """Only the distances measured in this frame."""
+        return Fingerprint(
+            self.type_names,
+            tuple(d[f] for d, f in zip(self.distances_m, self.fresh, strict=True)),
+            tuple(v[f] for v, f in zip(self.variances_m2, self.fresh, strict=True)),
+            tuple(f[f] for f in self.fresh),
+        )

@@ -1,0 +1,141 @@
+"""Room geometry: an axis-aligned box with box-shaped obstacles and reflective surfaces."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Box:
+    """Axis-aligned box, corners ``min_m`` and ``max_m`` in metres (shape (3,))."""
+
+    min_m: np.ndarray
+    max_m: np.ndarray
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "min_m", np.asarray(self.min_m, dtype=float))
+        object.__setattr__(self, "max_m", np.asarray(self.max_m, dtype=float))
+
+    def contains(self, points: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
+        """Whether each point (..., 3) or (..., 2) lies inside the box grown by ``margin_m``."""
+        points = np.asarray(points, dtype=float)
+        d = points.shape[-1]
+        lo, hi = self.min_m[:d] - margin_m, self.max_m[:d] + margin_m
+        return np.all((points >= lo) & (points <= hi), axis=-1)
+
+
+@dataclass(frozen=True)
+class Surfaces:
+    """Amplitude reflection coefficients |Gamma| (0..1) of the room's surfaces."""
+
+    walls: float = 0.6
+    floor: float = 0.5
+    ceiling: float = 0.5
+    obstacles: float = 0.7
+
+    def face_coefficients(self) -> np.ndarray:
+        """Coefficients of the six room faces, ordered x=0, x=Lx, y=0, y=Ly, z=0, z=Lz."""
+        return np.array(
+            [self.walls, self.walls, self.walls, self.walls, self.floor, self.ceiling]
+        )
+
+
+@dataclass(frozen=True)
+class Room:
+    """Shoebox room ``[0, Lx] x [0, Ly] x [0, Lz]`` with obstacles.
+
+    Parameters
+    ----------
+    size_m : array of shape (3,)
+        Room extent (Lx, Ly, Lz) in metres.
+    obstacles : tuple of Box
+        Axis-aligned obstacles; they block the robot and radar paths and reflect.
+    surfaces : Surfaces
+        Reflection coefficients.
+    """
+
+    size_m: np.ndarray
+    obstacles: tuple[Box, ...] = ()
+    surfaces: Surfaces = field(default_factory=Surfaces)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "size_m", np.asarray(self.size_m, dtype=float))
+        object.__setattr__(self, "obstacles", tuple(self.obstacles))
+
+    @property
+    def diagonal_m(self) -> float:
+        """Length of the room's space diagonal in metres."""
+        return float(np.linalg.norm(self.size_m))
+
+    @property
+    def obstacle_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Obstacle corners stacked as two arrays of shape (n_obstacles, 3)."""
+        if not self.obstacles:
+            empty = np.zeros((0, 3))
+            return empty, empty
+        return (
+            np.stack([b.min_m for b in self.obstacles]),
+            np.stack([b.max_m for b in self.obstacles]),
+        )
+
+    def inside(self, points: np.ndarray, margin_m: float = 0.0) -> np.ndarray:
+        """Whether points (..., 2|3) lie inside the room, at least ``margin_m`` from its walls."""
+        points = np.asarray(points, dtype=float)
+        d = points.shape[-1]
+        return np.all((points >= margin_m) & (points <= self.size_m[:d] - margin_m), axis=-1)
+
+    def free(self, xy: np.ndarray, clearance_m: float = 0.0) -> np.ndarray:
+        """Whether floor positions (..., 2) are free for a robot disc of radius ``clearance_m``.
+
+        A position is free when it is inside the room at least ``clearance_m`` from each wall
+        and at least ``clearance_m`` from every obstacle's footprint (obstacles of any height
+        block the robot).
+        """
+        xy = np.asarray(xy, dtype=float)
+        ok = self.inside(xy, clearance_m)
+        if self.obstacles:
+            lo, hi = self.obstacle_bounds
+            p = xy[..., None, :]
+            # Distance from each point to each obstacle footprint (0 inside it).
+            gap = np.maximum(np.maximum(lo[:, :2] - p, p - hi[:, :2]), 0.0)
+            blocked = np.linalg.norm(gap, axis=-1) <= clearance_m
+            ok &= ~np.any(blocked, axis=-1)
+        return ok
+
+    def segments_blocked(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+        """Whether straight segments cross any obstacle (slab test, vectorised).
+
+        Parameters
+        ----------
+        start, end : arrays of shape (..., 3)
+            Segment end points in metres.
+
+        Returns
+        -------
+        ndarray of bool, shape (...)
+            True where the open segment passes through the interior of an obstacle.
+        """
+        start = np.asarray(start, dtype=float)
+        end = np.asarray(end, dtype=float)
+        out = np.zeros(np.broadcast_shapes(start.shape, end.shape)[:-1], dtype=bool)
+        if not self.obstacles:
+            return out
+        lo, hi = self.obstacle_bounds  # (B, 3)
+        s = start[..., None, :]
+        d = (end - start)[..., None, :]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / d
+            t0 = (lo - s) * inv
+            t1 = (hi - s) * inv
+        tmin = np.where(np.isnan(t0), -np.inf, np.minimum(t0, t1))
+        tmax = np.where(np.isnan(t1), np.inf, np.maximum(t0, t1))
+        # Parallel to a slab and outside it: never enters.
+        parallel_out = (d == 0.0) & ((s < lo) | (s > hi))
+        t_enter = np.max(tmin, axis=-1)
+        t_exit = np.min(tmax, axis=-1)
+        eps = 1e-9
+        hit = (t_enter < t_exit - eps) & (t_exit > eps) & (t_enter < 1.0 - eps)
+        hit &= ~np.any(parallel_out, axis=-1)
+        return np.any(hit, axis=-1)
