@@ -100,7 +100,8 @@ class BoxConfig(Strict):
     def _ordered(self) -> BoxConfig:
         if any(lo >= hi for lo, hi in zip(self.min, self.max, strict=True)):
             raise PydanticCustomError(
-                "box", "min {lo} must be below max {hi} on every axis",
+                "box",
+                "min {lo} must be below max {hi} on every axis",
                 {"lo": _fmt(self.min), "hi": _fmt(self.max)},
             )
         return self
@@ -147,7 +148,8 @@ class ReflectorTypeConfig(Strict):
         missing = [f for f in self._needs[self.kind] if getattr(self, f) is None]
         if missing:
             raise PydanticCustomError(
-                "reflector", "kind {kind} needs {fields}",
+                "reflector",
+                "kind {kind} needs {fields}",
                 {"kind": self.kind, "fields": ", ".join(missing)},
             )
         return self
@@ -174,7 +176,9 @@ class ReflectorPlacement(Strict):
 
 
 class ReflectorsConfig(Strict):
-    types: dict[str, ReflectorTypeConfig] = {"A": ReflectorTypeConfig(kind="trihedral", edge_m=0.05)}
+    types: dict[str, ReflectorTypeConfig] = {
+        "A": ReflectorTypeConfig(kind="trihedral", edge_m=0.05)
+    }
     layout: list[ReflectorPlacement] = []
 
     @model_validator(mode="after")
@@ -184,7 +188,8 @@ class ReflectorsConfig(Strict):
         for i, r in enumerate(self.layout):
             if r.type not in self.types:
                 raise PydanticCustomError(
-                    "type", "layout[{i}].type {t} is not one of the types {known}",
+                    "type",
+                    "layout[{i}].type {t} is not one of the types {known}",
                     {"i": i, "t": repr(r.type), "known": _fmt(sorted(self.types))},
                 )
         return self
@@ -204,7 +209,9 @@ class CfarConfig(Strict):
     @classmethod
     def _non_negative(cls, v: list[int]) -> list[int]:
         if any(c < 0 for c in v):
-            raise PydanticCustomError("cells", "expected 2 non-negative integers, got {v}", {"v": _fmt(v)})
+            raise PydanticCustomError(
+                "cells", "expected 2 non-negative integers, got {v}", {"v": _fmt(v)}
+            )
         return v
 
 
@@ -255,11 +262,18 @@ class RadarConfig(Strict):
     def _cfar_fits(self) -> RadarConfig:
         fm = self.fmcw()
         g, t = self.cfar.guard_cells, self.cfar.training_cells
-        if 2 * (g[0] + t[0]) + 1 > fm.samples_per_chirp or 2 * (g[1] + t[1]) + 1 > fm.chirps_per_frame:
+        if (
+            2 * (g[0] + t[0]) + 1 > fm.samples_per_chirp
+            or 2 * (g[1] + t[1]) + 1 > fm.chirps_per_frame
+        ):
             raise PydanticCustomError(
-                "cfar", "cfar window {w} cells does not fit the {n} range x {m} Doppler map",
-                {"w": _fmt([2 * (g[0] + t[0]) + 1, 2 * (g[1] + t[1]) + 1]),
-                 "n": fm.samples_per_chirp, "m": fm.chirps_per_frame},
+                "cfar",
+                "cfar window {w} cells does not fit the {n} range x {m} Doppler map",
+                {
+                    "w": _fmt([2 * (g[0] + t[0]) + 1, 2 * (g[1] + t[1]) + 1]),
+                    "n": fm.samples_per_chirp,
+                    "m": fm.chirps_per_frame,
+                },
             )
         if sum(t) == 0:
             raise PydanticCustomError("cfar", "cfar needs at least one training cell", {})
@@ -286,7 +300,17 @@ class RobotConfig(Strict):
 
 # --------------------------------------------------------------------------- tracking
 class TrackingConfig(Strict):
+    """LRP identification and tracking (see :mod:`lrp_gym.tracking`).
+
+    A detection may be a reflector of a type when its RCS estimate lies within
+    ``[peak - rcs_tolerance_db - rcs_pattern_loss_db, peak + rcs_tolerance_db]`` (the
+    incidence-angle pattern only ever lowers the apparent RCS). ``rate_gate_mps`` bounds the
+    jump of the measured radial velocity a track accepts in one frame (a turn of the robot).
+    """
+
     rcs_tolerance_db: PositiveFloat = 8.0
+    rcs_pattern_loss_db: NonNegFloat = 6.0
+    rate_gate_mps: PositiveFloat = 3.0
     measurement_std_m: PositiveFloat = 0.02
     velocity_std_mps: PositiveFloat = 0.1
     process_accel_std_mps2: PositiveFloat = 2.0
@@ -299,7 +323,8 @@ class TrackingConfig(Strict):
     def _m_of_n(self) -> TrackingConfig:
         if self.confirm_hits > self.confirm_window:
             raise PydanticCustomError(
-                "m_of_n", "confirm_hits ({m}) cannot exceed confirm_window ({n})",
+                "m_of_n",
+                "confirm_hits ({m}) cannot exceed confirm_window ({n})",
                 {"m": self.confirm_hits, "n": self.confirm_window},
             )
         return self
@@ -342,7 +367,8 @@ class LocalizationConfig(Strict):
     def _counts(self) -> LocalizationConfig:
         if not self.min_particles <= self.max_particles:
             raise PydanticCustomError(
-                "particles", "min_particles ({a}) must not exceed max_particles ({b})",
+                "particles",
+                "min_particles ({a}) must not exceed max_particles ({b})",
                 {"a": self.min_particles, "b": self.max_particles},
             )
         return self
@@ -417,7 +443,9 @@ class ScenarioConfig(Strict):
     def from_dict(cls, data: Any, source: str | None = None) -> ScenarioConfig:
         """Validate a mapping; raise :class:`ScenarioError` listing every problem."""
         if not isinstance(data, dict):
-            raise ScenarioError([f"expected a mapping at the top level, got {type(data).__name__}"], source)
+            raise ScenarioError(
+                [f"expected a mapping at the top level, got {type(data).__name__}"], source
+            )
         try:
             return cls.model_validate(data)
         except ValidationError as exc:
@@ -507,9 +535,9 @@ def format_errors(exc: ValidationError) -> list[str]:
     """One ``field.path: message`` line per validation problem."""
     problems: list[str] = []
     for err in exc.errors():
-        loc = ".".join(
-            f"[{p}]" if isinstance(p, int) else str(p) for p in err["loc"]
-        ).replace(".[", "[")
+        loc = ".".join(f"[{p}]" if isinstance(p, int) else str(p) for p in err["loc"]).replace(
+            ".[", "["
+        )
         msg = err["msg"]
         if err["type"] == "extra_forbidden":
             msg = "unknown key (not part of the schema)"

@@ -29,7 +29,9 @@ def bench(
     names = list(COMPONENTS) if component == "all" else [component]
     unknown = [n for n in names if n not in COMPONENTS]
     if unknown:
-        raise InputError(f"--component: unknown {unknown[0]!r}; choose from {', '.join(COMPONENTS)} or all")
+        raise InputError(
+            f"--component: unknown {unknown[0]!r}; choose from {', '.join(COMPONENTS)} or all"
+        )
     cfg = load_scenario(scenario)
     results: dict = {}
     for name in names:

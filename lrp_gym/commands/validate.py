@@ -23,18 +23,21 @@ def validate(
     world = World.from_config(cfg)
     fm = world.fmcw
     if json_out:
-        print_json({
-            "name": cfg.name,
-            "room_size_m": cfg.room.size,
-            "obstacles": len(cfg.room.obstacles),
-            "reflectors": [
-                {"position_m": r.position, "type": r.type} for r in cfg.reflectors.layout
-            ],
-            "reflector_types": {t.name: {"kind": t.kind, "rcs_dbsm": t.rcs_dbsm}
-                                for t in world.layout.types},
-            "radar": fm.summary(),
-            "valid": True,
-        })
+        print_json(
+            {
+                "name": cfg.name,
+                "room_size_m": cfg.room.size,
+                "obstacles": len(cfg.room.obstacles),
+                "reflectors": [
+                    {"position_m": r.position, "type": r.type} for r in cfg.reflectors.layout
+                ],
+                "reflector_types": {
+                    t.name: {"kind": t.kind, "rcs_dbsm": t.rcs_dbsm} for t in world.layout.types
+                },
+                "radar": fm.summary(),
+                "valid": True,
+            }
+        )
         return
     console.print(f"[bold green]valid[/] scenario [bold]{cfg.name}[/]  {cfg.description}")
     lx, ly, lz = cfg.room.size
@@ -45,7 +48,9 @@ def validate(
     refl = Table(title="reflectors", show_lines=False)
     for col in ("#", "type", "kind", "x [m]", "y [m]", "z [m]", "RCS [dBsm]"):
         refl.add_column(col, justify="right")
-    for i, (pos, t) in enumerate(zip(world.layout.positions_m, world.layout.type_index, strict=True)):
+    for i, (pos, t) in enumerate(
+        zip(world.layout.positions_m, world.layout.type_index, strict=True)
+    ):
         rt = world.layout.types[t]
         refl.add_row(str(i), rt.name, rt.kind, *(f"{v:.3f}" for v in pos), f"{rt.rcs_dbsm:.2f}")
     console.print(refl)

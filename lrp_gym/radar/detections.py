@@ -39,7 +39,9 @@ class Detections:
         for name in ("range_m", "velocity_mps", "power_dbm", "rcs_dbsm", "snr_db"):
             object.__setattr__(self, name, _f64(getattr(self, name)))
         n = len(self.range_m)
-        if any(len(getattr(self, k)) != n for k in ("velocity_mps", "power_dbm", "rcs_dbsm", "snr_db")):
+        if any(
+            len(getattr(self, k)) != n for k in ("velocity_mps", "power_dbm", "rcs_dbsm", "snr_db")
+        ):
             raise ValueError("all Detections arrays must have the same length")
 
     def __len__(self) -> int:
@@ -60,15 +62,28 @@ class Detections:
         if not parts:
             return Detections()
         return Detections(
-            *(np.concatenate([getattr(p, k) for p in parts])
-              for k in ("range_m", "velocity_mps", "power_dbm", "rcs_dbsm", "snr_db"))
+            *(
+                np.concatenate([getattr(p, k) for p in parts])
+                for k in ("range_m", "velocity_mps", "power_dbm", "rcs_dbsm", "snr_db")
+            )
         )
 
     def to_records(self) -> list[dict[str, float]]:
         """JSON-friendly rows."""
         return [
-            {"range_m": float(r), "velocity_mps": float(v), "power_dbm": float(p),
-             "rcs_dbsm": float(s), "snr_db": float(n)}
-            for r, v, p, s, n in zip(self.range_m, self.velocity_mps, self.power_dbm,
-                                     self.rcs_dbsm, self.snr_db, strict=True)
+            {
+                "range_m": float(r),
+                "velocity_mps": float(v),
+                "power_dbm": float(p),
+                "rcs_dbsm": float(s),
+                "snr_db": float(n),
+            }
+            for r, v, p, s, n in zip(
+                self.range_m,
+                self.velocity_mps,
+                self.power_dbm,
+                self.rcs_dbsm,
+                self.snr_db,
+                strict=True,
+            )
         ]

@@ -37,9 +37,7 @@ class Surfaces:
 
     def face_coefficients(self) -> np.ndarray:
         """Coefficients of the six room faces, ordered x=0, x=Lx, y=0, y=Ly, z=0, z=Lz."""
-        return np.array(
-            [self.walls, self.walls, self.walls, self.walls, self.floor, self.ceiling]
-        )
+        return np.array([self.walls, self.walls, self.walls, self.walls, self.floor, self.ceiling])
 
 
 @dataclass(frozen=True)

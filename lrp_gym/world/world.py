@@ -61,10 +61,14 @@ class World:
             types.append(ReflectorType(name, t.kind, rcs, half, cutoff))
         mount = cfg.radar.mount_height_m
         centre = np.array([room.size_m[0] / 2, room.size_m[1] / 2, mount])
-        positions = np.array([r.position for r in cfg.reflectors.layout], dtype=float).reshape(-1, 3)
+        positions = np.array([r.position for r in cfg.reflectors.layout], dtype=float).reshape(
+            -1, 3
+        )
         axes = np.array(
-            [r.axis if r.axis is not None else centre - np.array(r.position)
-             for r in cfg.reflectors.layout],
+            [
+                r.axis if r.axis is not None else centre - np.array(r.position)
+                for r in cfg.reflectors.layout
+            ],
             dtype=float,
         ).reshape(-1, 3)
         layout = ReflectorLayout(
