@@ -284,9 +284,9 @@ class RadarConfig(Strict):
 class OdometryNoiseConfig(Strict):
     """Gaussian noise on turned angle and travelled distance (plus optional AMCL alphas)."""
 
-    sigma_turn_deg: NonNegFloat = 1.0
-    sigma_distance_m: NonNegFloat = 0.01
-    alphas: Annotated[list[NonNegFloat], Field(min_length=4, max_length=4)] = [0.0, 0.0, 0.0, 0.0]
+    sigma_turn_deg: NonNegFloat = 0.2
+    sigma_distance_m: NonNegFloat = 0.002
+    alphas: Annotated[list[NonNegFloat], Field(min_length=4, max_length=4)] = [0.05, 0.01, 0.03, 0.01]
 
 
 class RobotConfig(Strict):
@@ -383,6 +383,11 @@ class PlacementConfig(Strict):
     min_spacing_m: NonNegFloat = 1.0
     wall_distance_m: NonNegFloat = 0.3
     constraint_tolerance_m: NonNegFloat = 0.1
+    # Layout search: every candidate is scored on the coarse search grid, the best
+    # ``refine_top`` again on ``grid_m``.
+    candidates: Annotated[int, Field(ge=1)] = 500
+    search_grid_m: PositiveFloat = 0.1
+    refine_top: Annotated[int, Field(ge=1)] = 8
 
 
 # --------------------------------------------------------------------------- task
@@ -399,6 +404,21 @@ class RewardConfig(Strict):
     goal: NonNegFloat = 5.0
 
 
+class ObservationConfig(Strict):
+    """Which observation type the env builds (see ``lrp_gym.envs.observations``)."""
+
+    type: str = "estimated"
+    n_waypoints: Annotated[int, Field(ge=1, le=20)] = 3
+
+
+class EnvConfig(Strict):
+    """Environment settings: observation type, collision sub-steps, render size."""
+
+    observation: ObservationConfig = ObservationConfig()
+    substeps: Annotated[int, Field(ge=1, le=50)] = 4
+    render_size_px: Annotated[int, Field(ge=64, le=2048)] = 480
+
+
 class TaskConfig(Strict):
     mode: Literal["path", "goal"] = "path"
     path: list[Vec2] = []
@@ -406,7 +426,6 @@ class TaskConfig(Strict):
     goal_tolerance_m: PositiveFloat = 0.25
     goal: GoalTaskConfig = GoalTaskConfig()
     rewards: RewardConfig = RewardConfig()
-    max_episode_steps: Annotated[int, Field(ge=1)] = 200
 
     @model_validator(mode="after")
     def _path_needed(self) -> TaskConfig:
@@ -429,6 +448,7 @@ class ScenarioConfig(Strict):
     localization: LocalizationConfig = LocalizationConfig()
     placement: PlacementConfig = PlacementConfig()
     task: TaskConfig = TaskConfig(mode="goal")
+    env: EnvConfig = EnvConfig()
     perturbations: dict[str, Any] = {}
 
     @model_validator(mode="after")

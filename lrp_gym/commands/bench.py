@@ -14,13 +14,14 @@ from lrp_gym.errors import InputError
 # component -> (module, function); each function takes (scenario_config, seconds) -> dict
 COMPONENTS = {
     "radar": ("lrp_gym.radar.bench", "bench_radar"),
+    "tracking": ("lrp_gym.tracking.bench", "bench_tracking"),
     "amcl": ("lrp_gym.localization.bench", "bench_amcl"),
     "env": ("lrp_gym.envs.bench", "bench_envs"),
 }
 
 
 def bench(
-    component: str = typer.Option("all", "--component", "-c", help="radar, amcl, env or all."),
+    component: str = typer.Option("all", "--component", "-c", help="radar, tracking, amcl, env or all."),
     scenario: str = typer.Option("ipin2023", help="Scenario for the component benchmarks."),
     seconds: float = typer.Option(3.0, min=0.1, help="Measuring time per figure."),
     json_out: bool = typer.Option(False, "--json", help="Print the figures as JSON."),
@@ -33,6 +34,7 @@ def bench(
             f"--component: unknown {unknown[0]!r}; choose from {', '.join(COMPONENTS)} or all"
         )
     cfg = load_scenario(scenario)
+    _pin_to_one_core()
     results: dict = {}
     for name in names:
         module, func = COMPONENTS[name]
@@ -56,6 +58,14 @@ def bench(
 
     rows("", results)
     console.print(table)
+
+
+def _pin_to_one_core() -> None:
+    """Run on a single CPU so the figures mean 'one core' (Linux; elsewhere a no-op)."""
+    import os
+
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
 
 
 def register(app: typer.Typer) -> None:
