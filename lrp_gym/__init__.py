@@ -11,3 +11,7 @@ from lrp_gym.config import ScenarioConfig, ScenarioError, load_scenario, save_sc
 __version__ = "0.1.0"
 
 __all__ = ["ScenarioConfig", "ScenarioError", "__version__", "load_scenario", "save_scenario"]
+
+# Registers LRPRadarNav-v0 and its variants with gymnasium (also in fresh worker processes,
+# through gym.make("lrp_gym:LRPRadarNav-v0")).
+from lrp_gym import envs as _envs  # noqa: E402,F401

@@ -1,0 +1,37 @@
+"""Gymnasium environments. Importing :mod:`lrp_gym` registers them.
+
+==========================  =========================================================
+id                          what differs
+==========================  =========================================================
+``LRPRadarNav-v0``          signal-level radar (FMCW beat signal, FFT, CFAR)
+``LRPRadarNavFast-v0``      detections-level radar drawn from the channel's paths
+``LRPRadarNavOracle-v0``    observation from the true pose (ablation)
+==========================  =========================================================
+"""
+
+from __future__ import annotations
+
+from gymnasium.envs.registration import register, registry
+
+MAX_EPISODE_STEPS = 200
+
+ENV_VARIANTS: dict[str, dict] = {
+    "LRPRadarNav-v0": {},
+    "LRPRadarNavFast-v0": {"radar_fidelity": "detections"},
+    "LRPRadarNavOracle-v0": {"observation": "oracle"},
+}
+
+
+def register_envs() -> None:
+    """Register every variant once (safe to call again, e.g. in spawned workers)."""
+    for env_id, kwargs in ENV_VARIANTS.items():
+        if env_id not in registry:
+            register(
+                id=env_id,
+                entry_point="lrp_gym.envs.nav_env:LRPRadarNavEnv",
+                max_episode_steps=MAX_EPISODE_STEPS,
+                kwargs=kwargs,
+            )
+
+
+register_envs()

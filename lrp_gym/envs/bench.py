@@ -1,0 +1,62 @@
+"""Steps per second of the registered environment variants."""
+
+from __future__ import annotations
+
+import time
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.utils.performance import benchmark_step
+
+from lrp_gym.config import ScenarioConfig
+from lrp_gym.envs import ENV_VARIANTS
+
+# Slow forward motion while turning: the robot circles on the spot, never collides, and AMCL
+# stays converged, which is the steady state the speed targets refer to.
+_CIRCLE_ACTION = np.array([0.1, 0.5], dtype=np.float32)
+
+
+def converged_steps_per_s(env: gym.Env, seconds: float, warmup_steps: int = 30, seed: int = 0) -> float:
+    """Steps per second after localisation has converged (resets excluded from the timing)."""
+    env.reset(seed=seed)
+    for _ in range(warmup_steps):
+        env.step(_CIRCLE_ACTION)
+    steps, elapsed = 0, 0.0
+    while elapsed < seconds:
+        t0 = time.perf_counter()
+        for _ in range(50):
+            _, _, terminated, truncated, _ = env.step(_CIRCLE_ACTION)
+            steps += 1
+            if terminated or truncated:
+                break
+        elapsed += time.perf_counter() - t0
+        if terminated or truncated:
+            env.reset()
+            for _ in range(warmup_steps):
+                env.step(_CIRCLE_ACTION)
+    return steps / elapsed
+
+
+def bench_envs(cfg: ScenarioConfig, seconds: float) -> dict:
+    """Steps/s per variant: converged (paper path start, circling) and gymnasium's random-action
+    benchmark (``benchmark_step``, includes resets with a fresh 10000-particle AMCL)."""
+    path_task = {"task": {"mode": "path"}}
+    out: dict = {}
+    for env_id in ENV_VARIANTS:
+        env = gym.make(env_id, scenario=cfg, overrides=path_task).unwrapped
+        converged = converged_steps_per_s(env, seconds)
+        info = env.step(_CIRCLE_ACTION)[4]
+        env.close()
+        rand_env = gym.make(env_id, scenario=cfg)
+        with_resets = benchmark_step(rand_env, target_duration=max(seconds, 1.0), seed=0)
+        rand_env.close()
+        out[env_id] = {
+            "steps_per_s": converged,
+            "steps_per_s_random_actions": with_resets,
+            "converged_particles": info["n_particles"],
+        }
+    fixed = {**path_task, "localization": {"min_particles": 10000, "max_particles": 10000}}
+    env = gym.make("LRPRadarNav-v0", scenario=cfg, overrides=fixed).unwrapped
+    out["LRPRadarNav-v0 (fixed 10000 particles)"] = {"steps_per_s": converged_steps_per_s(env, seconds)}
+    env.close()
+    return {"variants": out}

@@ -1,0 +1,175 @@
+"""Observation types, pluggable by name through a registry (``env.observation.type``).
+
+Every type turns a :class:`NavSnapshot` into an observation. The default ``estimated`` type uses
+only what the robot knows: the AMCL estimate and its uncertainty, the task's waypoints and its
+own last action. ``oracle`` swaps in the true pose (an ablation), ``dict`` exposes the same
+content as a Dict space.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+from lrp_gym.config import ObservationConfig
+from lrp_gym.envs.task import WaypointPath
+
+
+@dataclass(frozen=True)
+class NavSnapshot:
+    """What an observation may be built from after a step."""
+
+    est_pose: np.ndarray  # (3,) estimated (x, y, theta)
+    est_std: np.ndarray  # (3,) standard deviations of the estimate
+    converged: bool
+    true_pose: np.ndarray  # (3,) ground truth, used only by the oracle type
+    path: WaypointPath
+    s_est_m: float  # progress of the estimate along the path
+    s_true_m: float  # progress of the true pose along the path
+    last_action: np.ndarray  # (2,) in [-1, 1]
+    room_size_m: np.ndarray  # (3,)
+
+
+def to_robot_frame(points_xy: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """World points (K, 2) expressed in the frame of ``pose`` (x forward, y left)."""
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    d = points_xy - pose[:2]
+    return np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=-1)
+
+
+OBSERVATION_TYPES: dict[str, type[ObservationType]] = {}
+
+
+def register_observation(name: str):
+    """Class decorator adding an observation type to the registry under ``name``."""
+
+    def wrap(cls):
+        cls.name = name
+        OBSERVATION_TYPES[name] = cls
+        return cls
+
+    return wrap
+
+
+def make_observation(cfg: ObservationConfig, room_size_m: np.ndarray) -> ObservationType:
+    try:
+        cls = OBSERVATION_TYPES[cfg.type]
+    except KeyError:
+        known = ", ".join(sorted(OBSERVATION_TYPES))
+        raise ValueError(f"env.observation.type: unknown {cfg.type!r}; known types: {known}") from None
+    return cls(cfg, room_size_m)
+
+
+class ObservationType:
+    """Base class: a space and a function from snapshot to observation."""
+
+    name = "base"
+
+    def __init__(self, cfg: ObservationConfig, room_size_m: np.ndarray) -> None:
+        self.cfg = cfg
+        self.room_size_m = np.asarray(room_size_m, dtype=float)
+        self.reach_m = float(np.linalg.norm(self.room_size_m[:2]))
+
+    @property
+    def space(self) -> spaces.Space:
+        raise NotImplementedError
+
+    def observe(self, snap: NavSnapshot):
+        raise NotImplementedError
+
+
+@register_observation("estimated")
+class EstimatedPoseObservation(ObservationType):
+    """Flat float32 vector built from the pose *estimate*.
+
+    Layout (``n = n_waypoints``):
+
+    ==========  =====  =================================================================
+    index       count  content
+    ==========  =====  =================================================================
+    0-1         2      estimated x / Lx, y / Ly (0..1 inside the room)
+    2-3         2      cos, sin of the estimated heading
+    4-6         3      standard deviations of x, y (m) and heading (rad), capped at 5
+    7           1      1.0 when localisation has converged, else 0.0
+    8..8+2n     2n     next n waypoints (dx, dy) in the estimated robot frame, metres
+    8+2n..+2    2      goal (dx, dy) in the estimated robot frame, metres
+    last 2      2      previous action
+    ==========  =====  =================================================================
+    """
+
+    use_truth = False
+
+    def labels(self) -> list[str]:
+        n = self.cfg.n_waypoints
+        wp = [f"wp{i}_{c}" for i in range(1, n + 1) for c in ("dx", "dy")]
+        return ["x_norm", "y_norm", "cos_theta", "sin_theta", "std_x", "std_y", "std_theta",
+                "converged", *wp, "goal_dx", "goal_dy", "last_speed", "last_turn"]
+
+    @property
+    def space(self) -> spaces.Box:
+        n = self.cfg.n_waypoints
+        r = self.reach_m
+        low = np.array([-0.5, -0.5, -1, -1, 0, 0, 0, 0] + [-r] * (2 * n + 2) + [-1, -1], np.float32)
+        high = np.array([1.5, 1.5, 1, 1, 5, 5, 5, 1] + [r] * (2 * n + 2) + [1, 1], np.float32)
+        return spaces.Box(low, high, dtype=np.float32)
+
+    def _parts(self, snap: NavSnapshot):
+        if self.use_truth:
+            pose, std, conv, s = snap.true_pose, np.zeros(3), True, snap.s_true_m
+        else:
+            pose, std, conv, s = snap.est_pose, snap.est_std, snap.converged, snap.s_est_m
+        wps = to_robot_frame(snap.path.upcoming(s, self.cfg.n_waypoints), pose)
+        goal = to_robot_frame(snap.path.goal_m[None, :], pose)[0]
+        r = self.reach_m
+        return (
+            np.clip(pose[:2] / self.room_size_m[:2], -0.5, 1.5),
+            np.array([np.cos(pose[2]), np.sin(pose[2])]),
+            np.minimum(np.nan_to_num(std, nan=5.0), 5.0),
+            float(conv),
+            np.clip(wps, -r, r),
+            np.clip(goal, -r, r),
+            snap.last_action,
+        )
+
+    def observe(self, snap: NavSnapshot) -> np.ndarray:
+        xy, cs, std, conv, wps, goal, act = self._parts(snap)
+        return np.concatenate([xy, cs, std, [conv], wps.ravel(), goal, act]).astype(np.float32)
+
+
+@register_observation("oracle")
+class OraclePoseObservation(EstimatedPoseObservation):
+    """Same layout as ``estimated`` but from the true pose (zero std): an ablation baseline."""
+
+    use_truth = True
+
+
+@register_observation("dict")
+class DictObservation(EstimatedPoseObservation):
+    """The ``estimated`` content as a Dict space with named parts."""
+
+    @property
+    def space(self) -> spaces.Dict:
+        n, r = self.cfg.n_waypoints, self.reach_m
+        f32 = np.float32
+        return spaces.Dict({
+            "pose": spaces.Box(np.array([-0.5, -0.5, -1, -1], f32), np.array([1.5, 1.5, 1, 1], f32)),
+            "pose_std": spaces.Box(0.0, 5.0, (3,), f32),
+            "converged": spaces.Box(0.0, 1.0, (1,), f32),
+            "waypoints": spaces.Box(-r, r, (n, 2), f32),
+            "goal": spaces.Box(-r, r, (2,), f32),
+            "last_action": spaces.Box(-1.0, 1.0, (2,), f32),
+        })
+
+    def observe(self, snap: NavSnapshot) -> dict[str, np.ndarray]:
+        xy, cs, std, conv, wps, goal, act = self._parts(snap)
+        f32 = np.float32
+        return {
+            "pose": np.concatenate([xy, cs]).astype(f32),
+            "pose_std": std.astype(f32),
+            "converged": np.array([conv], f32),
+            "waypoints": wps.astype(f32),
+            "goal": goal.astype(f32),
+            "last_action": np.asarray(act, f32),
+        }

@@ -1,0 +1,114 @@
+"""Top-down rendering of the env with matplotlib (Agg for ``rgb_array``, a window for ``human``)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+TYPE_COLOURS = ("tab:red", "tab:blue", "tab:green", "tab:purple")
+
+
+def covariance_ellipse(cov_xy: np.ndarray, n_sigma: float = 2.0, n_points: int = 48) -> np.ndarray:
+    """Outline (n_points, 2) of the ``n_sigma`` ellipse of a 2x2 covariance, centred at 0."""
+    vals, vecs = np.linalg.eigh(0.5 * (cov_xy + cov_xy.T))
+    radii = n_sigma * np.sqrt(np.clip(vals, 0.0, None))
+    t = np.linspace(0, 2 * np.pi, n_points)
+    return (vecs @ (radii[:, None] * np.stack([np.cos(t), np.sin(t)]))).T
+
+
+class Renderer:
+    """Draws room, obstacles, reflectors, path, true and estimated pose, particles, ranges."""
+
+    def __init__(self, world, size_px: int, mode: str) -> None:
+        import matplotlib
+
+        if mode == "rgb_array":
+            from matplotlib.backends.backend_agg import FigureCanvasAgg
+            from matplotlib.figure import Figure
+
+            self.fig = Figure(figsize=(size_px / 100, size_px / 100), dpi=100)
+            FigureCanvasAgg(self.fig)
+        else:
+            import matplotlib.pyplot as plt
+
+            if matplotlib.get_backend().lower() == "agg":
+                import gymnasium as gym
+
+                gym.logger.warn("render_mode='human' needs a display; the Agg backend draws off-screen")
+            plt.ion()
+            self.fig = plt.figure(figsize=(size_px / 100, size_px / 100), dpi=100)
+        self.mode = mode
+        self.world = world
+        self.ax = self.fig.add_axes((0.06, 0.06, 0.9, 0.88))
+
+    def draw(self, env):
+        from matplotlib.patches import Rectangle
+
+        ax, world = self.ax, self.world
+        lx, ly = world.room.size_m[:2]
+        ax.clear()
+        ax.set_xlim(-0.1, lx + 0.1)
+        ax.set_ylim(-0.1, ly + 0.1)
+        ax.set_aspect("equal")
+        ax.add_patch(Rectangle((0, 0), lx, ly, fill=False, lw=2, color="black"))
+        for box in world.room.obstacles:
+            ax.add_patch(Rectangle(box.min_m[:2], *(box.max_m[:2] - box.min_m[:2]), color="0.6"))
+        layout = world.layout
+        for t, rtype in enumerate(layout.types):
+            sel = layout.type_index == t
+            ax.scatter(*layout.positions_m[sel, :2].T, marker="X", s=90, zorder=5,
+                       color=TYPE_COLOURS[t % len(TYPE_COLOURS)], label=f"LRP {rtype.name}")
+        path = env.path.waypoints_m
+        ax.plot(path[:, 0], path[:, 1], "--", color="0.4", lw=1)
+        ax.scatter(*path.T, s=10, color="0.4")
+        ax.scatter(*env.path.goal_m, marker="*", s=200, color="gold", edgecolor="k", zorder=6)
+        particles = getattr(env.localizer, "particles", None)
+        if particles is not None and len(particles):
+            step = max(len(particles) // 1500, 1)
+            ax.scatter(particles[::step, 0], particles[::step, 1], s=1, color="tab:orange", alpha=0.4)
+        # Tracked distances drawn as floor-plane circles around the reflector they best fit.
+        fp = env.fingerprint
+        radar = world.radar_position(env.pose[:2])
+        dz2 = (layout.positions_m[:, 2] - world.mount_height_m) ** 2
+        if fp is not None:
+            for t, dists in enumerate(fp.distances_m):
+                idx = np.flatnonzero(layout.type_index == t)
+                true_d = layout.distances_m(radar)[idx]
+                for d in dists:
+                    j = idx[np.argmin(np.abs(true_d - d))]
+                    r = np.sqrt(max(d**2 - dz2[j], 0.0))
+                    circ = np.linspace(0, 2 * np.pi, 90)
+                    ax.plot(layout.positions_m[j, 0] + r * np.cos(circ),
+                            layout.positions_m[j, 1] + r * np.sin(circ),
+                            color=TYPE_COLOURS[t % len(TYPE_COLOURS)], lw=0.6, alpha=0.5)
+        x, y, th = env.pose
+        ax.add_patch(plt_circle((x, y), world.robot.radius_m, "tab:green"))
+        ax.arrow(x, y, 0.35 * np.cos(th), 0.35 * np.sin(th), width=0.02, color="tab:green", zorder=7)
+        est = env.estimate
+        if est is not None:
+            ex, ey, eth = est.pose
+            ell = covariance_ellipse(est.covariance[:2, :2]) + est.pose[:2]
+            ax.plot(ell[:, 0], ell[:, 1], color="tab:purple", lw=1.5)
+            ax.arrow(ex, ey, 0.3 * np.cos(eth), 0.3 * np.sin(eth), width=0.015, color="tab:purple", zorder=8)
+        err = float(np.hypot(*(est.pose[:2] - env.pose[:2]))) if est is not None else float("nan")
+        ax.set_title(f"step {env._steps}  error {err:.3f} m  dets {len(env.detections)}", fontsize=9)
+        ax.legend(loc="upper right", fontsize=7)
+        self.fig.canvas.draw()
+        if self.mode == "rgb_array":
+            buf = np.asarray(self.fig.canvas.buffer_rgba())
+            return np.ascontiguousarray(buf[..., :3])
+        import matplotlib.pyplot as plt
+
+        plt.pause(1.0 / 30)
+        return None
+
+    def close(self) -> None:
+        if self.mode == "human":
+            import matplotlib.pyplot as plt
+
+            plt.close(self.fig)
+
+
+def plt_circle(centre, radius, colour):
+    from matplotlib.patches import Circle
+
+    return Circle(centre, radius, fill=False, color=colour, lw=1.5, zorder=7)
