@@ -24,6 +24,15 @@ class WaypointPath:
     waypoints_m: np.ndarray
     arc_m: np.ndarray
 
+    def __post_init__(self) -> None:
+        # Segment geometry, cached: project() runs twice per env step.
+        a = self.waypoints_m[:-1]
+        ab = self.waypoints_m[1:] - a
+        seg_len = np.maximum(np.hypot(ab[:, 0], ab[:, 1]), 1e-12)
+        object.__setattr__(self, "_seg_start", a)
+        object.__setattr__(self, "_seg_dir", ab / seg_len[:, None])
+        object.__setattr__(self, "_seg_len", seg_len)
+
     @classmethod
     def from_points(cls, points: np.ndarray) -> WaypointPath:
         pts = np.asarray(points, dtype=float).reshape(-1, 2)
@@ -44,19 +53,18 @@ class WaypointPath:
         Only the part of the path in ``[s_min, s_min + window_m]`` is searched, so progress
         along a path that passes the same place twice does not jump ahead.
         """
-        a, b = self.waypoints_m[:-1], self.waypoints_m[1:]
-        ab = b - a
-        seg_len2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-12)
-        t = np.clip(np.einsum("ij,ij->i", xy - a, ab) / seg_len2, 0.0, 1.0)
-        s = self.arc_m[:-1] + t * np.sqrt(seg_len2)
-        lo, hi = s_min, s_min + window_m
-        # Clamp each segment's candidate into the window, then take the nearest one.
-        seg_lo, seg_hi = self.arc_m[:-1], self.arc_m[1:]
-        s = np.clip(s, np.maximum(seg_lo, lo), np.minimum(seg_hi, hi))
-        valid = (seg_hi >= lo) & (seg_lo <= hi)
-        pts = self.point_at(s)
-        d2 = np.where(valid, np.sum((pts - xy) ** 2, axis=1), np.inf)
-        return float(s[np.argmin(d2)])
+        arc = self.arc_m
+        # Segments overlapping the window.
+        i0 = max(int(np.searchsorted(arc, s_min, side="right")) - 1, 0)
+        i1 = min(int(np.searchsorted(arc, s_min + window_m, side="left")), len(arc) - 1)
+        i1 = max(i1, i0 + 1)
+        rel = xy - self._seg_start[i0:i1]
+        along = np.clip(np.einsum("ij,ij->i", rel, self._seg_dir[i0:i1]), 0.0, self._seg_len[i0:i1])
+        s = np.clip(arc[i0:i1] + along, s_min, s_min + window_m)
+        # Distance from xy to the point at s on its own segment.
+        t = s - arc[i0:i1]
+        off = rel - t[:, None] * self._seg_dir[i0:i1]
+        return float(s[np.argmin(np.einsum("ij,ij->i", off, off))])
 
     def point_at(self, s_m: np.ndarray | float) -> np.ndarray:
         """Points (..., 2) at arc lengths ``s_m``."""
