@@ -1,0 +1,140 @@
+"""Ambiguity map figure: areas sharing fingerprints coloured by group, unique areas white."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from lrp_gym.placement.ambiguity import AmbiguityResult
+
+_MARKERS = ("o", "s", "^", "D", "v", "P")
+
+
+def plot_ambiguity_map(
+    result: AmbiguityResult,
+    room_size_m: np.ndarray,
+    reflectors_m: np.ndarray,
+    type_index: np.ndarray,
+    type_names: tuple[str, ...],
+    *,
+    obstacles: list[tuple[np.ndarray, np.ndarray]] | None = None,
+    path_xy_m: np.ndarray | None = None,
+    title: str = "",
+):
+    """Draw the ambiguity map; return the matplotlib figure (Agg backend, not shown).
+
+    Parameters
+    ----------
+    result : AmbiguityResult
+    room_size_m : array, shape (>= 2,)
+    reflectors_m : ndarray, shape (M, 3)
+    type_index : ndarray of int, shape (M,)
+    type_names : tuple of str
+    obstacles : list of (min_m, max_m), optional
+        Obstacle boxes, shaded grey.
+    path_xy_m : ndarray, shape (K, 2), optional
+        The task path, drawn with numbered waypoints (1-based).
+    title : str
+    """
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Rectangle
+
+    fig, ax = plt.subplots(figsize=(6.4, 6.0))
+    lx, ly = float(room_size_m[0]), float(room_size_m[1])
+    grid = result.grid
+    img = grid.to_image(result.group.astype(float), fill=np.nan)
+    img[img < 0] = np.nan  # unique cells: white background
+    n = max(result.n_groups, 1)
+    base = plt.get_cmap("tab20")(np.arange(20) % 20)
+    cmap = ListedColormap(base[np.arange(n) % 20])
+    cmap.set_bad("white")
+    ax.imshow(
+        np.ma.masked_invalid(img),
+        origin="lower",
+        extent=grid.extent(),
+        cmap=cmap,
+        vmin=-0.5,
+        vmax=n - 0.5,
+        interpolation="nearest",
+    )
+    excluded = np.isnan(grid.to_image(np.zeros(len(grid)), fill=np.nan))
+    if excluded.any():
+        ax.imshow(
+            np.ma.masked_where(~excluded, excluded.astype(float)),
+            origin="lower",
+            extent=grid.extent(),
+            cmap=ListedColormap(["0.85"]),
+            interpolation="nearest",
+        )
+    for lo, hi in obstacles or []:
+        ax.add_patch(
+            Rectangle(
+                lo[:2],
+                hi[0] - lo[0],
+                hi[1] - lo[1],
+                facecolor="0.55",
+                edgecolor="k",
+                hatch="//",
+                alpha=0.8,
+                zorder=3,
+            )
+        )
+    ax.add_patch(Rectangle((0, 0), lx, ly, fill=False, edgecolor="k", linewidth=2, zorder=4))
+    if path_xy_m is not None and len(path_xy_m):
+        path = np.asarray(path_xy_m, dtype=float)
+        ax.plot(path[:, 0], path[:, 1], "-", color="k", linewidth=1.2, zorder=5)
+        ax.plot(path[:, 0], path[:, 1], "o", color="k", markersize=3, zorder=5)
+        for k, (x, y) in enumerate(path, start=1):
+            ax.annotate(
+                str(k), (x, y), textcoords="offset points", xytext=(3, 3), fontsize=7, zorder=6
+            )
+    refl = np.asarray(reflectors_m, dtype=float)
+    for t, name in enumerate(type_names):
+        sel = np.asarray(type_index) == t
+        if sel.any():
+            ax.scatter(
+                refl[sel, 0],
+                refl[sel, 1],
+                marker=_MARKERS[t % len(_MARKERS)],
+                s=90,
+                facecolor="white",
+                edgecolor="k",
+                linewidth=1.8,
+                zorder=7,
+                label=f"LRP type {name}",
+            )
+            ax.scatter(refl[sel, 0], refl[sel, 1], marker="x", s=40, color="k", zorder=8)
+    ax.set_xlim(-0.05 * lx, 1.05 * lx)
+    ax.set_ylim(-0.05 * ly, 1.05 * ly)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(
+        title
+        or f"ambiguous {100 * result.ambiguous_fraction:.1f} % "
+        f"(systematic {100 * result.systematic_fraction:.1f} %, "
+        f"random {100 * result.random_fraction:.1f} %)",
+        fontsize=10,
+    )
+    ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
+    return fig
+
+
+def plot_scenario_map(cfg, result: AmbiguityResult, title: str = ""):
+    """:func:`plot_ambiguity_map` for a scenario (room, obstacles, layout and task path)."""
+    from lrp_gym.placement.scenario import layout_arrays
+
+    pos, idx, names = layout_arrays(cfg)
+    return plot_ambiguity_map(
+        result,
+        np.asarray(cfg.room.size),
+        pos,
+        idx,
+        names,
+        obstacles=[(np.asarray(b.min), np.asarray(b.max)) for b in cfg.room.obstacles],
+        path_xy_m=np.asarray(cfg.task.path) if cfg.task.path else None,
+        title=title,
+    )
