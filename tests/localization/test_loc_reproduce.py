@@ -1,0 +1,52 @@
+import json
+
+import numpy as np
+import pytest
+
+from lrp_gym.cli import main
+from lrp_gym.experiments.reproduce import converged_after
+
+
+def test_converged_after_definition():
+    assert converged_after(np.array([1.0, 0.5, 0.1, 0.2, 0.05, 0.01])) == 5
+    assert converged_after(np.array([0.1, 0.1])) == 1
+    assert converged_after(np.array([0.1, 0.3])) is None
+
+
+def test_reproduce_paper_smoke(tmp_path, capsys):
+    out = tmp_path / "r.json"
+    with pytest.raises(SystemExit) as exc:
+        main(
+            [
+                "reproduce-paper",
+                "--runs",
+                "1",
+                "--noise",
+                "off",
+                "--particles",
+                "1000",
+                "--json",
+                str(out),
+                "--plot",
+                str(tmp_path / "e.png"),
+            ]
+        )
+    assert exc.value.code == 0
+    data = json.loads(out.read_text())
+    assert data["positions"] == 15 and data["runs"] == 1
+    assert len(data["lut"]["errors_m"]) == len(data["amcl"]["mean_errors_m"]) == 15
+    assert data["lut"]["entries"] > 1000
+    assert all(e >= 0 for e in data["amcl"]["mean_errors_m"])
+    assert data["amcl"]["std_errors_m"] == [0.0] * 15  # one run
+    assert data["amcl"]["mean_error_m"] == pytest.approx(np.mean(data["amcl"]["mean_errors_m"]))
+    assert data["amcl"]["converged_after"] == converged_after(
+        np.array(data["amcl"]["mean_errors_m"])
+    )
+    assert (tmp_path / "e.png").stat().st_size > 1000
+    assert "AMCL mean error" in capsys.readouterr().out
+
+
+def test_reproduce_paper_rejects_bad_noise():
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce-paper", "--noise", "maybe"])
+    assert exc.value.code == 2
