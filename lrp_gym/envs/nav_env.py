@@ -8,6 +8,7 @@ task's score, not something the agent observes.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
@@ -20,6 +21,7 @@ from lrp_gym.envs.task import WaypointPath, sample_goal_task
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.localization.lut import LookupTable
+from lrp_gym.perturbations import FrameContext, PerturbationSet
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world import World, integrate_unicycle, odometry_delta, wrap_angle
@@ -98,11 +100,11 @@ class LRPRadarNavEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.cfg.task.frame_period_s)}
         self.dt_s = self.cfg.task.frame_period_s
         self.sensor = RadarSensor(self.world, self.cfg.radar)
-        fm = self.world.fmcw
-        self.tracker = LrpTracker(
-            self.world.layout, self.cfg.tracking, max_range_m=fm.max_range_m,
-            min_range_m=self.cfg.radar.min_range_m,
-        )
+        self._surveyed_sensor = self.sensor
+        # None when no perturbation is on: the hot path then pays one `is None` test per hook.
+        perturbations = PerturbationSet.from_config(self.cfg.perturbations, self.world)
+        self.perturbations: PerturbationSet | None = perturbations if len(perturbations) else None
+        self.tracker = LrpTracker.from_world(self.world, self.cfg.tracking)
         loc = self.cfg.localization
         self.localizer = Amcl(self.world, loc)
         self.lut = (
@@ -144,6 +146,12 @@ class LRPRadarNavEnv(gym.Env):
         known = self.pose if self.cfg.localization.init == "gaussian" else None
         self.localizer.reset(rng, pose=known)
         self._s_true = self.path.project(self.pose[:2])
+        if self.perturbations is not None:
+            # The radar may see another layout than the surveyed one the localiser uses.
+            self.sensor = self._surveyed_sensor
+            layout = self.perturbations.reset(self._frame_context(), rng)
+            if layout is not self.world.layout:
+                self.sensor = RadarSensor(replace(self.world, layout=layout), self.cfg.radar)
         self._sense(np.zeros(3), np.zeros(2))
         self._s_est = self.path.project(self.estimate.pose[:2])
         return self._observe(), self._info(collided=False, reached=False, rewards=None)
@@ -167,9 +175,13 @@ class LRPRadarNavEnv(gym.Env):
             velocity_xy = speed * np.array([np.cos(new_pose[2]), np.sin(new_pose[2])])
         self.pose = new_pose
         odo = self.world.odometry_noise.sample(odometry_delta(prev, new_pose), (), self.np_random)
+        self._steps += 1
+        if self.perturbations is not None:
+            odo, moved = self.perturbations.move(self._frame_context(), odo, self.np_random)
+            if moved is not None:
+                self.pose = moved
         self._sense(odo, velocity_xy)
         self._last_action = action.astype(float)
-        self._steps += 1
 
         s_prev = self._s_true
         self._s_true = self.path.project(
@@ -178,7 +190,12 @@ class LRPRadarNavEnv(gym.Env):
         self._s_est = self.path.project(
             self.estimate.pose[:2], max(self._s_est - _PROGRESS_BACK_M, 0.0), _PROGRESS_WINDOW_M
         )
-        reached = bool(np.linalg.norm(self.pose[:2] - self.path.goal_m) <= self.cfg.task.goal_tolerance_m)
+        # The goal counts once reached along the path, not by cutting across to it.
+        tol = self.cfg.task.goal_tolerance_m
+        reached = bool(
+            np.linalg.norm(self.pose[:2] - self.path.goal_m) <= tol
+            and self._s_true >= self.path.length_m - 2.0 * tol
+        )
         w = self.cfg.task.rewards
         rewards = {
             "progress": w.progress * (self._s_true - s_prev),
@@ -221,7 +238,16 @@ class LRPRadarNavEnv(gym.Env):
     def _sense(self, odometry: np.ndarray, velocity_xy: np.ndarray) -> None:
         """One radar frame, tracker update and localisation update."""
         rng = self.np_random
-        self.detections = self.sensor.measure(self.pose, velocity_xy, rng)
+        pert = self.perturbations
+        if pert is None:
+            self.detections = self.sensor.measure(self.pose, velocity_xy, rng)
+        else:
+            ctx = self._frame_context()
+            hidden, extra = pert.radar_inputs(ctx, rng)
+            det = self.sensor.measure(
+                self.pose, velocity_xy, rng, hidden=hidden, extra_scatterers=extra
+            )
+            self.detections = pert.filter_detections(ctx, det, rng)
         self.fingerprint = self.tracker.update(self.detections, self.dt_s)
         est = self.localizer.update(odometry, self.fingerprint, rng)
         if self.lut is not None:
@@ -230,6 +256,11 @@ class LRPRadarNavEnv(gym.Env):
             pose = np.array([lut_est.pose[0], lut_est.pose[1], est.pose[2]])
             est = PoseEstimate(pose, lut_est.covariance, 0, 0.0, lut_est.converged)
         self.estimate = est
+
+    def _frame_context(self) -> FrameContext:
+        return FrameContext(
+            self._steps, self.pose, self.world, self.sensor.world.layout, self.dt_s, self.sensor
+        )
 
     def _snapshot(self) -> NavSnapshot:
         return NavSnapshot(

@@ -1,0 +1,198 @@
+"""Pure-pursuit path follower that reads only the env's observation vector.
+
+The controller steers towards a *lookahead point*: the first point of the upcoming-waypoint
+polyline (robot frame, from the observation) that lies ``lookahead`` metres from the robot. The
+arc through that point has curvature ``2 y / L**2``; the turn rate is ``speed * curvature``.
+Speed is the smallest of four limits: the robot's top speed, a lateral-acceleration limit on the
+curvature (slow in sharp bends), an approach limit near the goal (do not overshoot the goal
+tolerance within one frame), and an uncertainty limit (creep while the pose estimate is spread
+out). While the heading is unknown the bearing to any target is meaningless, so the robot creeps
+straight ahead: consistent motion is what lets the particle filter resolve the heading. When
+the lookahead point lies far to the side or behind, the robot turns on the spot.
+
+It exposes the Stable-Baselines3 ``predict`` signature so the evaluator treats every agent alike.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+# Fixed part of the ``estimated`` / ``oracle`` observation layout (lrp_gym.envs.observations).
+_STD = slice(4, 7)
+_CONVERGED = 7
+_FIXED_LEN = 12  # 8 pose/std/converged + 2 goal + 2 last action
+
+
+@dataclass(frozen=True)
+class PurePursuitConfig:
+    """Controller gains and the robot limits the action is scaled by.
+
+    Attributes
+    ----------
+    max_speed_mps, max_turn_rate_rps : float
+        Robot limits; the action is ``(speed / max_speed, turn / max_turn_rate)``.
+    frame_period_s : float
+        Time one action is held (the env's frame period).
+    lookahead_m : float
+        Lookahead distance at standstill.
+    lookahead_time_s : float
+        Extra lookahead per m/s of the previous speed (look further when fast).
+    max_lateral_accel_mps2 : float
+        Speed limit in bends: ``v <= sqrt(a / |curvature|)``.
+    approach_gain : float
+        Near the goal, travel at most this fraction of the remaining distance per frame.
+    min_approach_speed_mps : float
+        Floor of the approach limit so the robot does not stall just outside the tolerance.
+    certain_std_m, uncertain_std_m : float
+        Position std (largest of x, y) at and below which full speed is allowed, and at and
+        above which the robot only creeps; linear in between.
+    uncertain_heading_std_rad : float
+        Heading std at and above which the robot only creeps.
+    creep_speed_mps : float
+        Speed while the estimate is uncertain or not converged.
+    turn_in_place_rad : float
+        Bearing of the lookahead point beyond which the robot turns on the spot.
+    turn_gain : float
+        Turn rate per radian of bearing when turning on the spot (1/s).
+    """
+
+    max_speed_mps: float = 2.0
+    max_turn_rate_rps: float = float(np.pi)
+    frame_period_s: float = 0.25
+    lookahead_m: float = 0.45
+    lookahead_time_s: float = 0.2
+    max_lateral_accel_mps2: float = 3.0
+    approach_gain: float = 0.8
+    min_approach_speed_mps: float = 0.3
+    certain_std_m: float = 0.08
+    uncertain_std_m: float = 0.3
+    uncertain_heading_std_rad: float = 0.5
+    creep_speed_mps: float = 0.3
+    turn_in_place_rad: float = 1.2
+    turn_gain: float = 3.0
+
+
+def lookahead_point(points: np.ndarray, distance_m: float) -> np.ndarray:
+    """First point at ``distance_m`` from the origin along the polyline origin -> ``points``.
+
+    Parameters
+    ----------
+    points : ndarray, shape (K, 2)
+        Polyline vertices in the robot frame (the robot sits at the origin).
+    distance_m : float
+        Lookahead radius.
+
+    Returns
+    -------
+    ndarray, shape (2,)
+        Where the polyline first leaves the circle of radius ``distance_m``; the last vertex
+        when the whole polyline lies inside the circle.
+    """
+    pts = np.vstack([np.zeros((1, 2)), np.asarray(points, dtype=float).reshape(-1, 2)])
+    a, d = pts[:-1], np.diff(pts, axis=0)
+    dd = np.einsum("ij,ij->i", d, d)
+    ad = np.einsum("ij,ij->i", a, d)
+    aa = np.einsum("ij,ij->i", a, a)
+    disc = ad**2 - dd * (aa - distance_m**2)
+    ok = (disc >= 0.0) & (dd > 1e-12)
+    # Larger root of |a + t d| = L: where the segment leaves the circle.
+    t = np.where(ok, (-ad + np.sqrt(np.where(ok, disc, 0.0))) / np.where(ok, dd, 1.0), -1.0)
+    hit = ok & (t >= 0.0) & (t <= 1.0)
+    if not hit.any():
+        return pts[-1].copy()
+    i = int(np.argmax(hit))
+    return a[i] + t[i] * d[i]
+
+
+class PurePursuitPolicy:
+    """Pure pursuit on the observation vector of the ``estimated`` or ``oracle`` type.
+
+    Parameters
+    ----------
+    config : PurePursuitConfig, optional
+        Gains and robot limits; see :meth:`from_env` to take the limits from an env.
+    """
+
+    def __init__(self, config: PurePursuitConfig | None = None) -> None:
+        self.config = config or PurePursuitConfig()
+
+    @classmethod
+    def from_env(cls, env: Any, **gains: float) -> PurePursuitPolicy:
+        """A policy whose robot limits and frame period match ``env`` (a gym env or wrapper)."""
+        base = env.unwrapped
+        lim = base.world.robot
+        cfg = replace(
+            PurePursuitConfig(),
+            max_speed_mps=float(lim.max_speed_mps),
+            max_turn_rate_rps=float(lim.max_turn_rate_rps),
+            frame_period_s=float(base.cfg.task.frame_period_s),
+            **gains,
+        )
+        return cls(cfg)
+
+    def control(self, obs: np.ndarray) -> tuple[float, float]:
+        """Speed (m/s) and turn rate (rad/s) for one flat observation."""
+        c = self.config
+        obs = np.asarray(obs, dtype=float)
+        n = (obs.shape[-1] - _FIXED_LEN) // 2
+        if obs.ndim != 1 or n < 1 or obs.shape[0] != _FIXED_LEN + 2 * n:
+            raise ValueError(
+                f"pure pursuit needs the flat 'estimated'/'oracle' observation, got shape {obs.shape}"
+            )
+        std = obs[_STD]
+        waypoints = obs[8 : 8 + 2 * n].reshape(n, 2)
+        goal = obs[8 + 2 * n : 10 + 2 * n]
+        last_speed = max(float(obs[-2]), 0.0) * c.max_speed_mps
+
+        lookahead = c.lookahead_m + c.lookahead_time_s * last_speed
+        target = lookahead_point(np.vstack([waypoints, goal]), lookahead)
+        dist = float(np.hypot(*target))
+        bearing = float(np.arctan2(target[1], target[0]))
+        goal_dist = float(np.hypot(*goal))
+
+        # Speed limits: top speed, uncertainty, goal approach, bend.
+        pos_std = float(np.max(std[:2]))
+        frac = np.clip((c.uncertain_std_m - pos_std) / (c.uncertain_std_m - c.certain_std_m), 0, 1)
+        if std[2] >= c.uncertain_heading_std_rad:
+            # Heading unknown: the bearing to the target is meaningless. Creep straight so the
+            # filter sees consistent motion and can resolve the heading.
+            return c.creep_speed_mps, 0.0
+        if obs[_CONVERGED] < 0.5:
+            frac = 0.0
+        v = c.creep_speed_mps + frac * (c.max_speed_mps - c.creep_speed_mps)
+        approach = max(c.approach_gain * goal_dist / c.frame_period_s, c.min_approach_speed_mps)
+        v = min(v, approach)
+
+        if abs(bearing) > c.turn_in_place_rad or dist < 1e-6:
+            omega = float(np.clip(c.turn_gain * bearing, -c.max_turn_rate_rps, c.max_turn_rate_rps))
+            return 0.0, omega
+        curvature = 2.0 * target[1] / dist**2
+        if abs(curvature) > 1e-9:
+            v = min(v, np.sqrt(c.max_lateral_accel_mps2 / abs(curvature)))
+            # Keep the arc when the turn rate saturates: slow down instead of cutting wider.
+            v = min(v, c.max_turn_rate_rps / abs(curvature))
+        return float(v), float(v * curvature)
+
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        """Action(s) in ``[-1, 1]^2`` for one observation (D,) or a batch (N, D).
+
+        Same signature and return as a Stable-Baselines3 policy; the controller is stateless.
+        """
+        obs = np.asarray(observation, dtype=float)
+        batch = np.atleast_2d(obs)
+        c = self.config
+        out = np.empty((batch.shape[0], 2), dtype=np.float32)
+        for i, row in enumerate(batch):
+            v, w = self.control(row)
+            out[i] = (v / c.max_speed_mps, w / c.max_turn_rate_rps)
+        np.clip(out, -1.0, 1.0, out=out)
+        return (out[0] if obs.ndim == 1 else out), state

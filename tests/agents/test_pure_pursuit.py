@@ -1,0 +1,110 @@
+"""Pure pursuit: lookahead geometry, closed loop on a kinematic robot, speed limits."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from agents.pure_pursuit import PurePursuitConfig, PurePursuitPolicy, lookahead_point
+from lrp_gym.envs.observations import NavSnapshot, make_observation
+from lrp_gym.envs.task import WaypointPath
+from lrp_gym.world import integrate_unicycle
+
+
+def test_lookahead_point_on_straight_line_is_at_the_radius():
+    pts = np.array([[1.0, 0.0], [2.0, 0.0]])
+    np.testing.assert_allclose(lookahead_point(pts, 0.5), [0.5, 0.0])
+    np.testing.assert_allclose(lookahead_point(pts, 1.5), [1.5, 0.0])
+
+
+def test_lookahead_point_on_corner_lies_on_circle_and_second_leg():
+    # Path goes 1 m ahead then turns left; a 1.25 m circle exits on the second leg at y = 0.75.
+    pts = np.array([[1.0, 0.0], [1.0, 2.0]])
+    p = lookahead_point(pts, 1.25)
+    np.testing.assert_allclose(p, [1.0, 0.75], atol=1e-12)
+    assert np.hypot(*p) == pytest.approx(1.25)
+
+
+def test_lookahead_point_beyond_path_end_is_last_vertex():
+    pts = np.array([[0.3, 0.1], [0.4, 0.2]])
+    np.testing.assert_allclose(lookahead_point(pts, 5.0), [0.4, 0.2])
+
+
+def _obs(pose, path, std=(0.0, 0.0, 0.0), converged=True, last=(0.0, 0.0), otype="estimated"):
+    from lrp_gym.config import ObservationConfig
+
+    room = np.array([5.0, 5.0, 4.0])
+    ot = make_observation(ObservationConfig(type=otype), room)
+    s = path.project(np.asarray(pose[:2]))
+    snap = NavSnapshot(
+        np.asarray(pose, float),
+        np.asarray(std, float),
+        converged,
+        np.asarray(pose, float),
+        path,
+        s,
+        s,
+        np.asarray(last, float),
+        room,
+    )
+    return ot.observe(snap)
+
+
+def test_closed_loop_on_paper_path_reaches_goal_and_tracks_path(paper_cfg):
+    """Perfect pose, exact kinematics: the controller follows the paper's 15 waypoints."""
+    path = WaypointPath.from_points(np.array(paper_cfg.task.path))
+    pol = PurePursuitPolicy()
+    c = pol.config
+    pose, last, xy = np.array(paper_cfg.robot.start_pose, float), np.zeros(2), []
+    for _ in range(60):
+        a, _ = pol.predict(_obs(pose, path, last=last))
+        assert np.all(np.abs(a) <= 1.0)
+        pose = integrate_unicycle(
+            pose, a[0] * c.max_speed_mps, a[1] * c.max_turn_rate_rps, c.frame_period_s
+        )
+        last = a
+        xy.append(pose[:2])
+        if np.linalg.norm(pose[:2] - path.goal_m) <= paper_cfg.task.goal_tolerance_m:
+            break
+    assert np.linalg.norm(pose[:2] - path.goal_m) <= paper_cfg.task.goal_tolerance_m
+    # 7 m at <= 2 m/s takes >= 14 frames; slowing in bends must not double that.
+    assert 14 <= len(xy) <= 28
+    from agents.evaluate import cross_track_m
+
+    assert cross_track_m(np.array(xy), path.waypoints_m).max() < 0.3
+
+
+def test_speed_drops_with_uncertainty_and_near_goal():
+    path = WaypointPath.from_points(np.array([[0.0, 0.0], [4.0, 0.0]]))
+    pol = PurePursuitPolicy()
+    c = pol.config
+    sure = pol.predict(_obs([0.5, 0.0, 0.0], path))[0][0]
+    vague = pol.predict(_obs([0.5, 0.0, 0.0], path, std=(0.2, 0.2, 0.1)))[0][0]
+    lost = pol.predict(_obs([0.5, 0.0, 0.0], path, std=(1.0, 1.0, 0.1), converged=False))[0][0]
+    near = pol.predict(_obs([3.8, 0.0, 0.0], path))[0][0]
+    assert sure == pytest.approx(1.0)
+    assert lost * c.max_speed_mps == pytest.approx(c.creep_speed_mps)
+    assert lost < vague < sure
+    # 0.2 m from the goal: at most approach_gain of the distance per frame.
+    expected = max(c.approach_gain * 0.2 / c.frame_period_s, c.min_approach_speed_mps)
+    assert near * c.max_speed_mps == pytest.approx(expected)
+
+
+def test_unknown_heading_creeps_straight_and_behind_target_turns_on_spot():
+    path = WaypointPath.from_points(np.array([[2.0, 2.0], [0.0, 2.0]]))
+    pol = PurePursuitPolicy(PurePursuitConfig())
+    a, _ = pol.predict(_obs([2.0, 2.0, 0.0], path, std=(0.05, 0.05, 2.0)))
+    assert a[1] == 0.0 and a[0] > 0.0
+    a, _ = pol.predict(_obs([2.0, 2.0, 0.0], path))  # target straight behind
+    assert a[0] == 0.0 and abs(a[1]) == pytest.approx(1.0)
+
+
+def test_predict_batch_matches_single_and_rejects_wrong_shape():
+    path = WaypointPath.from_points(np.array([[0.0, 0.0], [1.0, 1.0], [3.0, 1.0]]))
+    pol = PurePursuitPolicy()
+    obs = np.stack([_obs([0.2, 0.1, 0.3], path), _obs([1.5, 1.2, -0.2], path)])
+    batch, state = pol.predict(obs)
+    assert batch.shape == (2, 2) and batch.dtype == np.float32 and state is None
+    np.testing.assert_allclose(batch[1], pol.predict(obs[1])[0])
+    with pytest.raises(ValueError, match="observation"):
+        pol.predict(np.zeros(7))
