@@ -108,12 +108,21 @@ class BoxConfig(Strict):
 
 
 class SurfacesConfig(Strict):
-    """Amplitude reflection coefficients |Gamma| of the surfaces (0 = absorber, 1 = mirror)."""
+    """Amplitude reflection coefficients |Gamma| of the surfaces (0 = absorber, 1 = mirror).
 
-    walls: Fraction = 0.6
-    floor: Fraction = 0.5
-    ceiling: Fraction = 0.5
-    obstacles: Fraction = 0.7
+    Defaults for an office-like room at 60 GHz, at normal incidence. A lossless half-space of
+    relative permittivity eps reflects |Gamma| = (sqrt(eps) - 1) / (sqrt(eps) + 1): about 0.25
+    for plasterboard or wood (eps ~ 2.5-3), about 0.4 for concrete or screed (eps ~ 5-6.5).
+    Paint, roughness of a fraction of the 5 mm wavelength and layer structure scatter or
+    absorb part of the rest, so 0.35 (9 dB reflection loss) stands for walls and floor, and
+    0.25 (12 dB) for a ceiling of porous mineral-fibre tiles. Obstacles are taken as metal
+    furniture (shelves, cabinets): 0.8. Glass or bare metal walls need larger values.
+    """
+
+    walls: Fraction = 0.35
+    floor: Fraction = 0.35
+    ceiling: Fraction = 0.25
+    obstacles: Fraction = 0.8
 
 
 class RoomConfig(Strict):
@@ -199,11 +208,11 @@ class ReflectorsConfig(Strict):
 class CfarConfig(Strict):
     """2-D CFAR on the range-Doppler power map; the threshold follows from ``pfa``."""
 
-    method: Literal["CA", "SO", "GO", "OS"] = "CA"
+    method: Literal["CA", "SO", "GO", "OS"] = "OS"
     guard_cells: Annotated[list[int], Field(min_length=2, max_length=2)] = [2, 1]
     training_cells: Annotated[list[int], Field(min_length=2, max_length=2)] = [8, 3]
     pfa: Probability = 1e-6
-    os_rank: Annotated[float, Field(gt=0, le=1)] = 0.75
+    os_rank: Annotated[float, Field(gt=0, le=1)] = 0.6
 
     @field_validator("guard_cells", "training_cells")
     @classmethod
@@ -243,6 +252,13 @@ class RadarConfig(Strict):
     cfar: CfarConfig = CfarConfig()
     min_range_m: NonNegFloat = 0.3
     fidelity: Literal["signal", "detections"] = "signal"
+    #: the robot blocks paths that reach the radar (on its top deck) from below its horizontal
+    #: plane and paths that retrace themselves through the radar (lrp_gym/radar/channel.py)
+    body_shadowing: bool = True
+    #: zenith angle (deg) where the upward-facing antenna cone is 3 dB down; None = omni
+    antenna_half_power_deg: Annotated[float, Field(gt=0, le=180)] | None = 75.0
+    #: side/back lobe level of that cone relative to boresight (dB)
+    antenna_floor_db: Annotated[float, Field(ge=-60, le=0)] = -20.0
 
     def fmcw(self) -> FmcwParameters:
         """The waveform: from ``requirements`` when given, else from the explicit fields."""
@@ -434,6 +450,93 @@ class TaskConfig(Strict):
         return self
 
 
+# --------------------------------------------------------------------------- perturbations
+# Robustness perturbations (see lrp_gym.perturbations). Each has a ``severity`` in [0, 1]; the
+# physical parameters left at None are derived from it (documented per class there).
+Severity = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
+FrameCount = Annotated[int, Field(ge=0, le=100_000)]
+
+
+class _PerturbationBase(Strict):
+    severity: Severity = 0.5
+
+
+class ShadowingConfig(_PerturbationBase):
+    """Reflectors hidden for ``frames`` frames by a static obstacle or a walking person."""
+
+    mode: Literal["static", "person"] = "static"
+    frames: Annotated[int, Field(ge=1, le=100_000)] | None = None
+    reflectors: Annotated[int, Field(ge=1, le=1000)] = 1
+    start_frames: Annotated[list[FrameCount], Field(min_length=2, max_length=2)] = [3, 20]
+    person_size_m: PosVec3 = [0.5, 0.5, 1.8]
+
+
+class MissedDetectionsConfig(_PerturbationBase):
+    probability: Fraction | None = None
+
+
+class ClutterConfig(_PerturbationBase):
+    count: Annotated[int, Field(ge=0, le=10_000)] | None = None
+    rcs_spread_db: NonNegFloat = 3.0
+
+
+class DisplacedReflectorConfig(_PerturbationBase):
+    shift_m: NonNegFloat | None = None
+    reflectors: Annotated[int, Field(ge=1, le=1000)] = 1
+
+
+class OdometrySlipConfig(_PerturbationBase):
+    slip: Annotated[float, Field(gt=-1, le=10, allow_inf_nan=False)] | None = None
+    heading_bias_dps: Annotated[float, Field(ge=-3600, le=3600, allow_inf_nan=False)] | None = None
+
+
+class KidnappingConfig(_PerturbationBase):
+    frames: Annotated[list[FrameCount], Field(min_length=2, max_length=2)] = [5, 15]
+    min_jump_m: NonNegFloat | None = None
+
+
+class InterferenceConfig(_PerturbationBase):
+    burst_probability: Fraction | None = None
+    burst_frames: Annotated[int, Field(ge=1, le=100_000)] = 3
+    detections_per_frame: Annotated[int, Field(ge=0, le=10_000)] | None = None
+    rcs_spread_db: NonNegFloat = 6.0
+
+
+class IncidenceAngleConfig(_PerturbationBase):
+    half_angle_deg: Annotated[float, Field(gt=0, le=180, allow_inf_nan=False)] | None = None
+    cutoff_deg: Annotated[float, Field(gt=0, le=180, allow_inf_nan=False)] | None = None
+
+
+class PerturbationsConfig(Strict):
+    """Which perturbations are on (a section present = on); an unknown name is an error."""
+
+    shadowing: ShadowingConfig | None = None
+    missed_detections: MissedDetectionsConfig | None = None
+    clutter: ClutterConfig | None = None
+    displaced_reflector: DisplacedReflectorConfig | None = None
+    odometry_slip: OdometrySlipConfig | None = None
+    kidnapping: KidnappingConfig | None = None
+    interference: InterferenceConfig | None = None
+    incidence_angle: IncidenceAngleConfig | None = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _known_names(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            unknown = [k for k in data if k not in cls.model_fields]
+            if unknown:
+                raise PydanticCustomError(
+                    "perturbation",
+                    "unknown perturbation {names}; known: {known}",
+                    {"names": ", ".join(map(repr, unknown)), "known": ", ".join(cls.model_fields)},
+                )
+        return data
+
+    def active(self) -> dict[str, BaseModel]:
+        """The perturbations that are on, by name."""
+        return {k: v for k in type(self).model_fields if (v := getattr(self, k)) is not None}
+
+
 # --------------------------------------------------------------------------- scenario
 class ScenarioConfig(Strict):
     """A complete scenario. Every section has defaults; ``reflectors.layout`` must be given."""
@@ -449,7 +552,7 @@ class ScenarioConfig(Strict):
     placement: PlacementConfig = PlacementConfig()
     task: TaskConfig = TaskConfig(mode="goal")
     env: EnvConfig = EnvConfig()
-    perturbations: dict[str, Any] = {}
+    perturbations: PerturbationsConfig = PerturbationsConfig()
 
     @model_validator(mode="after")
     def _cross_checks(self) -> ScenarioConfig:

@@ -23,6 +23,8 @@ def radar(
     """Simulate one radar frame at --pose and print the detections and true LRP distances."""
     from lrp_gym.radar.sensor import RadarSensor
 
+    if not np.isfinite(velocity):
+        raise InputError(f"--velocity: must be a finite number, got {velocity:g}")
     cfg = load_scenario(scenario)
     world = World.from_config(cfg)
     p = np.asarray(pose, float)
@@ -72,5 +74,32 @@ def radar(
         console.print(f"saved {plot}")
 
 
+def radar_rate(
+    scenario: str = typer.Argument(..., help=ScenarioArg),
+    poses: int = typer.Option(300, "--poses", min=1, help="Random free poses."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the poses and the noise."),
+    fidelity: str = typer.Option("signal", "--fidelity", help="signal or detections."),
+    json_out: bool = typer.Option(False, "--json", help="Print JSON only."),
+) -> None:
+    """How often each LRP is detected within 10 cm with an RCS inside the tracker's window."""
+    from lrp_gym.radar.evaluate import lrp_detection_rate
+
+    if fidelity not in ("signal", "detections"):
+        raise InputError(f"--fidelity: expected signal or detections, got {fidelity!r}")
+    cfg = load_scenario(scenario)
+    res = lrp_detection_rate(cfg, poses, seed, fidelity=fidelity)
+    if json_out:
+        print_json({"scenario": cfg.name, "fidelity": fidelity, **res.as_dict()})
+        return
+    console.print(
+        f"{cfg.name} ({fidelity}, {poses} poses): LRPs delivered {100 * res.rate:.1f} % "
+        f"(within 10 cm: {100 * res.range_only_rate:.1f} %), "
+        f"median RCS error {res.median_rcs_error_db:+.2f} dB, "
+        f"range error std {100 * res.range_error_std_m:.2f} cm, "
+        f"{res.mean_detections:.1f} detections/frame"
+    )
+
+
 def register(app: typer.Typer) -> None:
     app.command("radar")(radar)
+    app.command("radar-rate")(radar_rate)

@@ -14,6 +14,15 @@ What is modelled
 - First-order specular returns of obstacle faces where the foot of the perpendicular from the
   radar lies on the face.
 - Shadowing: a path is dropped when one of its real (folded) segments crosses an obstacle.
+- Robot body (``body_shadowing``): the radar sits on the robot's top deck, so a leg that
+  leaves or reaches the radar from below its horizontal plane runs into the robot (this drops
+  the floor return under the robot and every path whose bounce next to the radar is on the
+  floor), and a path that retraces itself through the radar (the back-and-forth echo between
+  two parallel faces, image indices along one axis only with an even count) is blocked by the
+  radar and robot it passes through. For ``max_order <= 2`` these are all the paths through
+  the robot; interior legs of higher orders are not tested against the body.
+- Antenna (``antenna``): an optional zenith pattern (:mod:`lrp_gym.radar.antenna`) weighs each
+  path by the gains of its departing and arriving legs.
 
 Surfaces are smooth mirrors (no diffuse scattering); each bounce multiplies the amplitude by
 the face's |Gamma| and adds a phase of pi.
@@ -26,6 +35,7 @@ from functools import cached_property
 
 import numpy as np
 
+from lrp_gym.radar.antenna import ZenithPattern
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.room import Room
 
@@ -178,6 +188,12 @@ class Channel:
         ``P_T G_T G_R lambda^2`` in W m^2.
     max_order : int
         Largest number of surface bounces ``K``.
+    body_shadowing : bool
+        Drop the paths the robot's body blocks (see the module docstring).
+    antenna : ZenithPattern, optional
+        Elevation pattern; ``None`` is omnidirectional.
+    min_power_w : float
+        Reflector paths at or below this power are dropped early (they cannot show).
     """
 
     def __init__(
@@ -187,8 +203,14 @@ class Channel:
         wavelength_m: float,
         link_w_m2: float,
         max_order: int = 2,
+        *,
+        body_shadowing: bool = False,
+        antenna: ZenithPattern | None = None,
+        min_power_w: float = 0.0,
     ) -> None:
         self.room = room
+        self.body_shadowing = bool(body_shadowing)
+        self.antenna = antenna
         self.layout = layout
         self.wavelength_m = float(wavelength_m)
         self.link_w_m2 = float(link_w_m2)
@@ -207,15 +229,30 @@ class Channel:
         self.pair_amp2 = np.where(self.pair_a == self.pair_b, 1.0, 4.0)
         self.pair_order = self.image_order[self.pair_a] + self.image_order[self.pair_b]
         self.pair_gamma2 = (self.image_gamma[self.pair_a] * self.image_gamma[self.pair_b]) ** 2
-        self._retro = (
-            np.array([t.half_angle_deg is not None for t in layout.types], dtype=bool)[
-                layout.type_index
-            ]
-            if len(layout)
-            else np.zeros(0, bool)
-        )
+        types = [layout.types[i] for i in layout.type_index]
+        self._retro = np.array([t.half_angle_deg is not None for t in types], dtype=bool)
+        self._any_retro = bool(self._retro.any())
+        # per reflector: sqrt(peak RCS), log-amplitude lobe coefficient per deg^2, cutoff
+        self._amp_peak = np.sqrt(layout.rcs_m2) if len(layout) else np.zeros(0)
+        half = np.array([t.half_angle_deg or np.inf for t in types], dtype=float)
+        self._lobe_coef = -0.5 * 0.3 * np.log(10.0) / half**2
+        self._cos_cutoff = np.cos(np.radians([min(t.cutoff_deg, 180.0) for t in types]))
+        self._pair_scale = ((self.link_w_m2 / FOUR_PI**3) * self.pair_amp2 * self.pair_gamma2)[
+            :, None
+        ]
+        self._min_power_w = float(min_power_w)
         self._planes = _crossing_planes(idx, size, self.max_order)
         self._faces = self._obstacle_faces()
+        # The leg next to the radar of the path that ends at image n leaves the radar towards
+        # the image of the far end under the lattice inverse: same index where odd, negated
+        # where even (the odd maps are involutions, the even ones translations).
+        self.inverse_indices = np.where(idx % 2 != 0, idx, -idx)
+        nz = idx[:, 2]
+        single_axis = np.count_nonzero(idx, axis=1) == 1
+        retraces = single_axis & (self.image_order % 2 == 0) & (self.image_order > 0)
+        # surface path n leaves towards image n and comes back from image inverse(n)
+        below = (nz < 0) | (self.inverse_indices[:, 2] < 0)
+        self.surface_blocked_by_body = retraces | below
 
     # ------------------------------------------------------------------ geometry helpers
     def _obstacle_faces(self) -> dict[str, np.ndarray]:
@@ -237,6 +274,12 @@ class Channel:
             "lo": np.stack([r[3] for r in rows]),
             "hi": np.stack([r[4] for r in rows]),
         }
+
+    def _inverse_image_z(self, z: np.ndarray) -> np.ndarray:
+        """Heights (I, M) of the points ``z`` (M,) mirrored by the inverse lattice maps."""
+        n = self.inverse_indices[:, 2:3]
+        h = self.room.size_m[2]
+        return np.where(n % 2 != 0, (n + 1) * h - z[None, :], n * h + z[None, :])
 
     @cached_property
     def has_obstacles(self) -> bool:
@@ -301,7 +344,7 @@ class Channel:
         if self._faces["axis"].size:
             parts.append(self._face_paths(r, v))
         if len(self.layout):
-            parts.append(self._reflector_paths(imgs, img_vel, hidden))
+            parts.append(self._reflector_paths(r, imgs, img_vel, hidden))
         if extra_scatterers is not None and len(extra_scatterers[0]):
             parts.append(self._scatterer_paths(r, v, *extra_scatterers))
         out = Paths.concatenate(parts)
@@ -323,9 +366,16 @@ class Channel:
         rate = np.einsum("ik,ik->i", d, v - img_vel[sel]) / length
         power = self.link_w_m2 * self.image_gamma[sel] ** 2 / ((FOUR_PI * length) ** 2)
         order = self.image_order[sel]
+        if self.antenna is not None:
+            dz_out = imgs[sel, 2] - r[2]
+            dz_back = image_positions(r, self.inverse_indices[sel], self.room.size_m)[:, 2] - r[2]
+            power = power * self.antenna.gain(dz_out / length) * self.antenna.gain(dz_back / length)
+        ok = ~self.surface_blocked_by_body[sel] if self.body_shadowing else None
         if self.has_obstacles:
-            ok = self._visible(r, imgs[sel], np.arange(1, len(imgs)))
-            d, length, rate, power, order = d[ok], length[ok], rate[ok], power[ok], order[ok]
+            vis = self._visible(r, imgs[sel], np.arange(1, len(imgs)))
+            ok = vis if ok is None else ok & vis
+        if ok is not None:
+            length, rate, power, order = length[ok], rate[ok], power[ok], order[ok]
         n = len(length)
         return Paths(
             length / 2.0,
@@ -346,9 +396,13 @@ class Channel:
         on_face = np.all((foot >= f["lo"] - 1e-12) & (foot <= f["hi"] + 1e-12), axis=1)
         ok = (dist > 0) & on_face
         ok &= ~self.room.segments_blocked(np.broadcast_to(r, foot.shape), foot)
-        dist, rate = dist[ok], (f["sign"] * v[ax])[ok]
+        if self.body_shadowing:
+            ok &= foot[:, 2] >= r[2] - 1e-9  # a face seen from above lies below the deck
+        dist, rate, dz = dist[ok], (f["sign"] * v[ax])[ok], foot[ok, 2] - r[2]
         g = self.room.surfaces.obstacles
         power = self.link_w_m2 * g**2 / (FOUR_PI * 2.0 * dist) ** 2
+        if self.antenna is not None:
+            power = power * self.antenna.gain(dz / dist) ** 2
         n = len(dist)
         return Paths(
             dist,
@@ -360,29 +414,34 @@ class Channel:
             np.full(n, KIND_OBSTACLE_FACE),
         )
 
-    def _reflector_paths(self, imgs, img_vel, hidden) -> Paths:
+    def _reflector_paths(self, r, imgs, img_vel, hidden) -> Paths:
         lay = self.layout
         pos = lay.positions_m  # (M, 3)
         d = imgs[:, None, :] - pos[None, :, :]  # (I, M, 3) from reflector towards image
-        dist = np.linalg.norm(d, axis=-1)
-        rate = np.einsum("imk,ik->im", d, img_vel) / dist  # one-way length rate
-        sigma = lay.effective_rcs_m2(imgs)  # (I, M): pattern seen from each image
+        dist = np.sqrt(np.einsum("imk,imk->im", d, d))
+        u = d / dist[..., None]
+        rate = np.einsum("imk,ik->im", u, img_vel)  # one-way length rate
+        amp = self._rcs_amplitude(np.einsum("imk,mk->im", u, lay.axes))  # sqrt(sigma), (I, M)
         a, b = self.pair_a, self.pair_b
-        sig = np.sqrt(sigma[a] * sigma[b])
-        if np.any(self._retro):
-            ua, ub = d[a] / dist[a][..., None], d[b] / dist[b][..., None]
-            beta = np.degrees(np.arccos(np.clip(np.einsum("pmk,pmk->pm", ua, ub), -1, 1)))
-            lobe = 10.0 ** (-0.3 * (beta / RETRO_LOBE_DEG) ** 2)
+        sig = amp[a] * amp[b]
+        if self._any_retro:
+            cos_beta = np.einsum("pmk,pmk->pm", u[a], u[b])
+            beta = np.degrees(np.arccos(np.clip(cos_beta, -1.0, 1.0)))
+            lobe = np.exp((-0.3 * np.log(10.0) / RETRO_LOBE_DEG**2) * beta**2)
             sig = np.where(self._retro, sig * lobe, sig)
-        power = (
-            (self.link_w_m2 / FOUR_PI**3)
-            * (self.pair_amp2 * self.pair_gamma2)[:, None]
-            * sig
-            / (dist[a] ** 2 * dist[b] ** 2)
-        )
-        keep = power > 0
+        power = self._pair_scale * sig / (dist[a] * dist[b]) ** 2
+        if self.antenna is not None or self.body_shadowing:
+            # height of the far end of each leg's radar-side segment, relative to the radar
+            dz = self._inverse_image_z(pos[:, 2]) - r[2]  # (I, M)
+            if self.antenna is not None:
+                g = self.antenna.gain(dz / dist)
+                power = power * (g[a] * g[b])
+            if self.body_shadowing:
+                up = dz >= -1e-9
+                power = np.where(up[a] & up[b], power, 0.0)
         if hidden is not None:
-            keep &= ~np.asarray(hidden, bool)[None, :]
+            power = np.where(np.asarray(hidden, bool)[None, :], 0.0, power)
+        keep = power > self._min_power_w
         if self.has_obstacles:
             vis = self._visible(
                 pos[None, :, :],
@@ -390,15 +449,29 @@ class Channel:
                 np.broadcast_to(np.arange(len(imgs))[:, None], dist.shape),
             )
             keep &= vis[a] & vis[b]
-        rng_m = 0.5 * (dist[a] + dist[b])
-        vel = 0.5 * (rate[a] + rate[b])
-        order = np.broadcast_to(self.pair_order[:, None], power.shape)
-        refl = np.broadcast_to(np.arange(len(lay))[None, :], power.shape)
-        kind = np.where(order == 0, KIND_DIRECT, KIND_REFLECTOR_MULTIPATH)
-        n = int(keep.sum())
+        pi, mi = np.nonzero(keep)
+        ai, bi = a[pi], b[pi]
+        order = self.pair_order[pi]
         return Paths(
-            rng_m[keep], vel[keep], power[keep], np.zeros(n), refl[keep], order[keep], kind[keep]
+            0.5 * (dist[ai, mi] + dist[bi, mi]),
+            0.5 * (rate[ai, mi] + rate[bi, mi]),
+            power[pi, mi],
+            np.zeros(len(pi)),
+            mi,
+            order,
+            np.where(order == 0, KIND_DIRECT, KIND_REFLECTOR_MULTIPATH),
         )
+
+    def _rcs_amplitude(self, cos_incidence: np.ndarray) -> np.ndarray:
+        """``sqrt`` of the RCS each reflector shows at the incidence cosines (..., M).
+
+        The same Gaussian lobe and cutoff as :meth:`ReflectorType.pattern`, vectorised over
+        the reflectors.
+        """
+        c = np.clip(cos_incidence, -1.0, 1.0)
+        angle2 = np.degrees(np.arccos(c)) ** 2
+        amp = self._amp_peak * np.exp(self._lobe_coef * angle2)
+        return np.where(c >= self._cos_cutoff, amp, 0.0)
 
     def _scatterer_paths(self, r, v, positions, rcs_m2) -> Paths:
         pos = np.asarray(positions, float).reshape(-1, 3)
@@ -408,6 +481,10 @@ class Channel:
         rate = d @ v / dist
         power = self.link_w_m2 * rcs / (FOUR_PI**3 * dist**4)
         ok = ~self.room.segments_blocked(np.broadcast_to(r, pos.shape), pos) & (dist > 0)
+        if self.body_shadowing:
+            ok &= pos[:, 2] >= r[2] - 1e-9
+        if self.antenna is not None:
+            power = power * self.antenna.gain((pos[:, 2] - r[2]) / np.maximum(dist, 1e-12)) ** 2
         n = int(ok.sum())
         return Paths(
             dist[ok],

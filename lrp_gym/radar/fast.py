@@ -1,106 +1,157 @@
 """Detections-level radar model: detections drawn straight from the channel's paths.
 
 For fast RL. It mimics the signal model (:mod:`lrp_gym.radar.processing`) without building the
-cube:
+cube or the map:
 
 1. each path lands at a fractional (range, Doppler) bin, including the range-Doppler coupling;
-2. paths within one resolution cell of the window (see ``WindowTable.resolution_bins``) of a
-   stronger path merge into it: position is the power-weighted centroid, power the sum;
-3. the peak in the map is ``P * coherent_gain^2 * scalloping^2`` at a uniformly drawn sub-bin
-   offset, plus complex Gaussian noise of one map cell;
-4. CA-CFAR with interference: a peak is detected when it exceeds
-   ``alpha / N * (N * noise + E * sum of the peaks inside its training ring)``, where ``E`` is
-   the window's energy spread (Parseval: ``N sum w^2 / (sum w)^2`` per axis), so strong returns
-   nearby mask weak ones as they do in the map (the SO/GO/OS variants are approximated by CA);
-5. the interpolation error is Gaussian with std ``k / sqrt(SNR)`` bins per axis, ``k``
-   calibrated against the signal model (:data:`RANGE_ERROR_K`, :data:`DOPPLER_ERROR_K`);
+2. paths within one resolution cell of the window (``WindowTable.resolution_bins``) of a
+   stronger path merge into it: the position is the power-weighted centroid, the amplitude
+   the coherent sum (carrier phases included, each path weighted by the window's response at
+   its distance from the head), so close paths fade as they do in the map;
+3. the peak is that power times the scalloping loss of a uniformly drawn sub-bin offset, plus
+   complex Gaussian noise of one map cell;
+4. OS-CFAR with interference: a peak at level ``P`` is masked when more than ``N - k`` of its
+   training cells lie above ``P / alpha``. The cells each peak (the tested one included)
+   raises above that level are the rectangle where the window's sidelobe envelope, times the
+   peak's power, exceeds it; the model counts the overlap of these rectangles with the
+   training ring. Otherwise the threshold is ``alpha`` times the mean k-th order statistic
+   of the noise. CA/SO/GO use the same rule with ``k = N / 2`` (masking by a few strong cells
+   is what tells OS from the averaging detectors; the averaging ones are masked earlier,
+   which this model does not reproduce);
+5. the interpolation error is Gaussian with std ``K / sqrt(2 SNR)`` bins per axis, ``K``
+   fitted against the signal model by :mod:`lrp_gym.radar.calibrate`;
 6. noise false alarms: a Poisson number (``Pfa`` per cell) at random cells.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
+from lrp_gym.radar._merge import greedy_owner
 from lrp_gym.radar.channel import Paths
 from lrp_gym.radar.detections import Detections
+from lrp_gym.radar.processing import window, window_dtft
 
-#: interpolation error std in bins at unit SNR (times 1/sqrt(SNR)); fitted to the signal model
-RANGE_ERROR_K = 0.6
-DOPPLER_ERROR_K = 0.6
+#: interpolation error std in bins times sqrt(2 SNR); from ``python -m lrp_gym.radar.calibrate``
+RANGE_ERROR_K = 1.02
+DOPPLER_ERROR_K = 1.08
 
 
-@dataclass
+def sidelobe_envelope(name: str, n: int, max_bins: float, step: float = 0.05) -> np.ndarray:
+    """Decreasing envelope of ``|W(d)|^2 / |W(0)|^2`` on offsets ``0, step, ..., max_bins``."""
+    w = window(name, n)
+    d = np.arange(0.0, max_bins + step, step)
+    g = np.abs(window_dtft(w, d)) ** 2 / float(w.sum()) ** 2
+    return np.maximum.accumulate(g[::-1])[::-1]
+
+
 class FastDetectionModel:
     """Detections straight from paths; build with :meth:`for_sensor`."""
 
-    sensor: object  # RadarSensor (kept untyped to avoid an import cycle)
+    def __init__(self, sensor, use_numba: bool = True) -> None:
+        self.sensor = sensor
+        self.use_numba = use_numba
+        fm, proc, cfar = sensor.fmcw, sensor.processor, sensor.cfar
+        self.ns, self.nc = fm.samples_per_chirp, fm.chirps_per_frame
+        name = sensor.config.window
+        self.step = 0.05
+        (h0, h1) = cfar.half_window
+        self.env_r = sidelobe_envelope(name, self.ns, h0 + 2.0, self.step)
+        self.env_d = sidelobe_envelope(name, self.nc, h1 + 2.0, self.step)
+        self.res_r = proc.range_table.resolution_bins
+        self.res_d = proc.doppler_table.resolution_bins
+        n = cfar.n_training
+        k = cfar.rank if cfar.method == "OS" else max(n // 2, 1)
+        self.max_occupied = n - k
+        self.alpha = cfar.alpha
+        if cfar.method == "OS":
+            self.noise_stat = float(np.sum(1.0 / (n - np.arange(k))))  # E[X_(k)], unit noise
+        elif cfar.method in ("SO", "GO"):
+            self.noise_stat = float(cfar.n_half)
+        else:
+            self.noise_stat = 1.0
 
     @classmethod
     def for_sensor(cls, sensor) -> FastDetectionModel:
         return cls(sensor)
 
+    def _extent(self, env: np.ndarray, ratio: np.ndarray) -> np.ndarray:
+        """Offset (bins) out to which ``env`` stays above ``ratio`` (0 if never)."""
+        # env decreases: count the table entries above the ratio
+        idx = np.searchsorted(-env, -ratio, side="left")
+        return idx * self.step
+
     def detect(self, paths: Paths, rng: np.random.Generator) -> Detections:
         s = self.sensor
         fm, proc, cfar = s.fmcw, s.processor, s.cfar
-        ns, nc = fm.samples_per_chirp, fm.chirps_per_frame
+        ns, nc = self.ns, self.nc
         noise_on = s.noise_on
         cell = s.noise_cell
         coupling = 2.0 * paths.velocity_mps * fm.chirp_period_s / fm.wavelength_m
-        rb = paths.range_m / fm.range_resolution_m + coupling
-        db = paths.velocity_mps / fm.velocity_resolution_mps  # Doppler bins from 0 velocity
-        peak = paths.power_w * proc.coherent_gain2
+        order = np.argsort(-paths.power_w)
+        rb = (paths.range_m / fm.range_resolution_m + coupling)[order]
+        db = (paths.velocity_mps / fm.velocity_resolution_mps)[order]  # from 0 velocity
+        peak = paths.power_w[order] * proc.coherent_gain2
+        phase = paths.phase_rad[order]
         # --- merge paths within one resolution cell of a stronger one (greedy by power)
-        order = np.argsort(-peak)
-        rb, db, peak = rb[order], db[order], peak[order]
-        res_r, res_d = proc.range_table.resolution_bins, proc.doppler_table.resolution_bins
-        dr = np.abs(rb[:, None] - rb[None, :])
-        dd = np.abs((db[:, None] - db[None, :] + nc / 2) % nc - nc / 2)
-        near = (dr < res_r) & (dd < res_d)
-        owner = np.full(len(rb), -1)
-        for i in range(len(rb)):  # loop over paths (tens), not samples
-            if owner[i] < 0:
-                owner[(owner < 0) & near[i]] = i
-        heads = np.unique(owner)
+        owner = greedy_owner(rb, db, self.res_r, self.res_d, nc, self.use_numba)
+        heads = np.flatnonzero(owner == np.arange(len(rb)))
         wsum = np.bincount(owner, weights=peak, minlength=len(rb))[heads]
         crb = np.bincount(owner, weights=peak * rb, minlength=len(rb))[heads] / wsum
-        cdb = (
-            db[heads]
-            + np.bincount(
-                owner, weights=peak * ((db - db[owner] + nc / 2) % nc - nc / 2), minlength=len(rb)
-            )[heads]
-            / wsum
+        rel_d = (db - db[owner] + nc / 2) % nc - nc / 2  # Doppler relative to the head
+        cdb = db[heads] + np.bincount(owner, weights=peak * rel_d, minlength=len(rb))[heads] / wsum
+        # coherent sum, each path weighted by the window response at its offset from the head
+        off_r = np.abs(rb - rb[owner])
+        off_d = np.abs(rel_d)
+        resp = np.sqrt(
+            np.interp(off_r, np.arange(len(self.env_r)) * self.step, self.env_r)
+            * np.interp(off_d, np.arange(len(self.env_d)) * self.step, self.env_d)
         )
-        cpk = wsum
+        z = np.sqrt(peak) * resp * np.exp(1j * phase)
+        amp = (
+            np.bincount(owner, weights=z.real, minlength=len(rb))[heads]
+            + 1j * np.bincount(owner, weights=z.imag, minlength=len(rb))[heads]
+        )
+        cpk = np.abs(amp) ** 2
         # --- scalloping at a random sub-bin offset, noise on the peak
-        off_r = rng.uniform(-0.5, 0.5, len(heads))
-        off_d = rng.uniform(-0.5, 0.5, len(heads))
-        g = np.interp(off_r, proc.range_table.offset, proc.range_table.gain) * np.interp(
-            off_d, proc.doppler_table.offset, proc.doppler_table.gain
+        nh = len(heads)
+        g = np.interp(
+            rng.uniform(-0.5, 0.5, nh), proc.range_table.offset, proc.range_table.gain
+        ) * np.interp(
+            rng.uniform(-0.5, 0.5, nh), proc.doppler_table.offset, proc.doppler_table.gain
         )
         clean = cpk * g**2
         if noise_on:
-            z = rng.standard_normal(len(heads)) + 1j * rng.standard_normal(len(heads))
-            meas = np.abs(np.sqrt(clean) + np.sqrt(cell / 2.0) * z) ** 2
+            zn = rng.standard_normal(nh) + 1j * rng.standard_normal(nh)
+            meas = np.abs(np.sqrt(clean) + np.sqrt(cell / 2.0) * zn) ** 2
         else:
             meas = clean
-        # --- CA-CFAR with the interference of neighbouring peaks
+        # --- OS-CFAR: count training cells raised above meas / alpha by any peak
+        level = meas / self.alpha  # (H,)
+        ratio = level[:, None] / np.maximum(clean[None, :], 1e-300)  # (i, j)
+        ext_r = self._extent(self.env_r, ratio)
+        ext_d = self._extent(self.env_d, ratio)
+        ri, ki = np.round(crb), np.round(cdb)
+        rel_r = crb[None, :] - ri[:, None]
+        rel_k = (cdb[None, :] - ki[:, None] + nc / 2) % nc - nc / 2
         (g0, g1), (h0, h1) = cfar.guard, cfar.half_window
-        ar = np.abs(crb[:, None] - crb[None, :])
-        ad = np.abs((cdb[:, None] - cdb[None, :] + nc / 2) % nc - nc / 2)
-        in_ring = (ar <= h0 + 0.5) & (ad <= h1 + 0.5) & ~((ar <= g0 + 0.5) & (ad <= g1 + 0.5))
-        spread = (ns * proc.range_table.noise_gain / proc.range_table.coherent_gain**2) * (
-            nc * proc.doppler_table.noise_gain / proc.doppler_table.coherent_gain**2
-        )
-        interference = spread * (in_ring * clean[None, :]).sum(axis=1)
-        n_tr = cfar.n_training
-        alpha_ca = n_tr * (cfar.pfa ** (-1.0 / n_tr) - 1.0)
-        thr = alpha_ca / n_tr * ((n_tr * cell if noise_on else 0.0) + interference)
+
+        def overlap(rel, ext, half):
+            """Integers in [-half, half] strictly within ext of rel."""
+            lo = np.maximum(np.floor(rel - ext) + 1, -half)
+            hi = np.minimum(np.ceil(rel + ext) - 1, half)
+            return np.where(ext > 0, np.maximum(hi - lo + 1, 0), 0)
+
+        occupied = overlap(rel_r, ext_r, h0) * overlap(rel_k, ext_d, h1) - overlap(
+            rel_r, ext_r, g0
+        ) * overlap(rel_k, ext_d, g1)
+        masked = occupied.sum(axis=1) > self.max_occupied
+        thr = self.alpha * self.noise_stat * cell
         if not noise_on:
-            thr = np.maximum(thr, -math.log(cfar.pfa) * cell)
-        det = meas > thr
+            thr = -math.log(cfar.pfa) * cell
+        det = (meas > thr) & ~masked
         snr = clean[det] / cell
         n = int(det.sum())
         sig = 1.0 / np.sqrt(np.maximum(2.0 * snr, 1e-12))
@@ -119,7 +170,7 @@ class FastDetectionModel:
             if n_fa:
                 fa_r = rng.uniform(1, ns - 1, n_fa)
                 fa_v = rng.uniform(-vmax, vmax, n_fa)
-                fa_p = cell * (-math.log(cfar.pfa) + rng.exponential(1.0, n_fa))
+                fa_p = thr * (1.0 + rng.exponential(1.0 / self.alpha, n_fa))
                 rng_m = np.concatenate([rng_m, fa_r * fm.range_resolution_m])
                 vel = np.concatenate([vel, fa_v])
                 snr_db = np.concatenate([snr_db, 10.0 * np.log10(fa_p / cell)])

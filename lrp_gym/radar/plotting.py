@@ -51,6 +51,13 @@ def plot_range_doppler(
             ax.axhline(
                 d, color="white", ls="--", lw=0.8, label="true LRP distance" if i == 0 else None
             )
+    # zoom on the room: everything of interest lies within the farthest detection or LRP
+    far = max(
+        [float(np.max(detections.range_m)) if len(detections) else 0.0]
+        + ([float(np.max(true_distances_m))] if true_distances_m is not None else [])
+    )
+    if far > 0:
+        ax.set_ylim(0.0, min(range_axis_m[-1] + dr / 2, 1.2 * far + 0.5))
     ax.set_xlabel("radial velocity [m/s]")
     ax.set_ylabel("range [m]")
     ax.set_title(title)

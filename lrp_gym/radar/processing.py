@@ -18,7 +18,6 @@ from functools import lru_cache
 
 import numpy as np
 import scipy.fft
-from scipy.ndimage import maximum_filter
 from scipy.signal import get_window
 
 from lrp_gym.radar.cfar import Cfar2D
@@ -129,28 +128,57 @@ class RangeDopplerProcessor:
         p = spec.real**2 + spec.imag**2
         return np.fft.fftshift(p, axes=1)
 
-    def peaks(self, power: np.ndarray, floor: float = 0.0) -> Peaks:
-        """CFAR detections grouped to local maxima, with interpolated positions.
+    def peaks(
+        self, power: np.ndarray, floor: float = 0.0, prethreshold: float | None = None
+    ) -> Peaks:
+        """CFAR detections at local maxima, with interpolated positions.
+
+        Only candidate cells are tested: 3x3 local maxima (Doppler wraps, range clamps) above
+        ``max(floor, prethreshold)``. A detection must be a local maximum anyway, so the
+        candidate path finds exactly what thresholding the full map would, as long as the
+        pre-threshold is below every threshold that could matter (see
+        :attr:`lrp_gym.radar.cfar.Cfar2D.prethreshold_fraction`).
 
         Parameters
         ----------
         power : ndarray (N_s, N_c)
         floor : float
             Absolute threshold in map units added to the CFAR (used for noise-free maps).
+        prethreshold : float, optional
+            Cells at or below it are not tested (map units); ``None`` tests every local
+            maximum above ``floor``.
         """
-        thr = self.cfar.threshold(power)
-        if floor > 0:
-            thr = np.maximum(thr, floor)
-        local = maximum_filter(power, size=3, mode=("nearest", "wrap"))
-        hit = (power > thr) & (power >= local)
-        hit[0, :] = False  # bin 0 carries no range; leakage and DC live there
-        i, k = np.nonzero(hit)
-        nr, nd = power.shape
-        mag = np.sqrt(power)
-        ip, im = np.minimum(i + 1, nr - 1), np.maximum(i - 1, 0)
-        kp, km = (k + 1) % nd, (k - 1) % nd
-        a0 = mag[i, k]
-        dr, gr = self.range_table.interpolate(mag[im, k], a0, mag[ip, k])
-        dd, gd = self.doppler_table.interpolate(mag[i, km], a0, mag[i, kp])
-        est = power[i, k] / (self.coherent_gain2 * (gr * gd) ** 2)
-        return Peaks(i + dr, k + dd, power[i, k], est)
+        cfar = self.cfar
+        h0, h1 = cfar.pad_width
+        padded = cfar.pad(power)
+        width = padded.shape[1]
+        screen = max(floor, prethreshold or 0.0)
+        i, k = np.nonzero(power[1:] > screen)  # bin 0 carries no range; leakage and DC live there
+        i += 1
+        # 3x3 local maxima: the mirrored range padding repeats the edge row, as "nearest" does
+        flat = padded.reshape(-1)
+        centre = (i + h0) * width + (k + h1)
+        val = flat[centre]
+        nb = flat[centre[:, None] + self._neighbours(width)]
+        local = np.all(val[:, None] >= nb, axis=1)
+        i, k, centre, val = i[local], k[local], centre[local], val[local]
+        thr = cfar.threshold_at(padded, i, k)
+        hit = val > np.maximum(thr, floor)
+        i, k, centre, val = i[hit], k[hit], centre[hit], val[hit]
+        # the four neighbours for the interpolation (the last range row's mirror is itself)
+        a0 = np.sqrt(val)
+        dr, gr = self.range_table.interpolate(
+            np.sqrt(flat[centre - width]), a0, np.sqrt(flat[centre + width])
+        )
+        dd, gd = self.doppler_table.interpolate(
+            np.sqrt(flat[centre - 1]), a0, np.sqrt(flat[centre + 1])
+        )
+        est = val / (self.coherent_gain2 * (gr * gd) ** 2)
+        return Peaks(i + dr, k + dd, val, est)
+
+    @staticmethod
+    @lru_cache(maxsize=8)
+    def _neighbours(width: int) -> np.ndarray:
+        """Flat offsets of the 8 neighbours of a cell in a padded map ``width`` wide."""
+        off = (np.array([-1, 0, 1])[:, None] * width + np.array([-1, 0, 1])).reshape(-1)
+        return off[off != 0]

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from lrp_gym.config import RadarConfig
+from lrp_gym.radar.antenna import ZenithPattern
 from lrp_gym.radar.cfar import Cfar2D
 from lrp_gym.radar.channel import Channel, Paths
 from lrp_gym.radar.detections import Detections
@@ -54,12 +55,22 @@ class RadarSensor:
         )
         self.noise_w = noise_power_w(self.fmcw, radar.noise_figure_db, radar.temperature_k)
         self.noise_on = bool(radar.noise)
+        # Paths 90 dB below the per-sample noise cannot show in the map (50 dB below a
+        # cell's noise); dropping them also keeps float32 clear of denormals.
+        self.min_path_power_w = 1e-9 * self.noise_w
         self.channel = Channel(
             world.room,
             world.layout,
             self.fmcw.wavelength_m,
             self.link_w_m2,
             radar.max_reflection_order,
+            body_shadowing=radar.body_shadowing,
+            antenna=(
+                ZenithPattern(radar.antenna_half_power_deg, radar.antenna_floor_db)
+                if radar.antenna_half_power_deg is not None
+                else None
+            ),
+            min_power_w=self.min_path_power_w,
         )
         c = radar.cfar
         self.cfar = Cfar2D(
@@ -68,6 +79,8 @@ class RadarSensor:
         self.processor = RangeDopplerProcessor(self.fmcw, radar.window, self.cfar)
         #: noise power of one map cell (the noise level in map units, also with noise off)
         self.noise_cell = self.noise_w * self.processor.noise_gain
+        #: cells at or below this map power are not CFAR-tested (no measurable effect on Pfa)
+        self.prethreshold = self.cfar.alpha * self.cfar.prethreshold_fraction * self.noise_cell
         self.min_range_m = radar.min_range_m
         self.last_map_db: np.ndarray | None = None
         self.last_paths: Paths | None = None
@@ -79,9 +92,17 @@ class RadarSensor:
 
     # ------------------------------------------------------------------ conversions
     def rcs_dbsm(self, power_w: np.ndarray, range_m: np.ndarray) -> np.ndarray:
-        """Invert the radar equation: RCS from received power and range."""
+        """Invert the radar equation: RCS from received power and range.
+
+        With an antenna pattern the two-way gain is undone for the zenith angle a target at
+        the reflectors' mean height would have at that range (only those need a fair RCS).
+        """
         r = np.maximum(np.asarray(range_m, float), 1e-6)
         sigma = np.asarray(power_w) * FOUR_PI**3 * r**4 / self.link_w_m2
+        antenna = self.channel.antenna
+        if antenna is not None and len(self.world.layout):
+            dz = float(np.mean(self.world.layout.positions_m[:, 2])) - self.world.mount_height_m
+            sigma = sigma / antenna.gain(np.clip(dz / r, -1.0, 1.0)) ** 2
         return 10.0 * np.log10(np.maximum(sigma, 1e-30))
 
     def paths(
@@ -101,9 +122,7 @@ class RadarSensor:
             hidden=hidden,
             extra_scatterers=extra_scatterers,
         )
-        # Paths 90 dB below the per-sample noise cannot show in the map (50 dB below a
-        # cell's noise); dropping them also keeps float32 clear of denormals.
-        return p.select((p.range_m <= self.fmcw.max_range_m) & (p.power_w > 1e-9 * self.noise_w))
+        return p.select((p.range_m <= self.fmcw.max_range_m) & (p.power_w > self.min_path_power_w))
 
     def measure(
         self,
@@ -144,7 +163,7 @@ class RadarSensor:
         )
         # Noise-free maps: an ideal known-noise floor keeps float round-off from detecting.
         floor = 0.0 if self.noise_on else -math.log(self.cfar.pfa) * self.noise_cell
-        pk = self.processor.peaks(pmap, floor)
+        pk = self.processor.peaks(pmap, floor, self.prethreshold)
         nc = fm.chirps_per_frame
         vel = (pk.doppler_bin - nc // 2) * fm.velocity_resolution_mps
         vmax = fm.max_velocity_mps

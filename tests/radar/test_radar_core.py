@@ -46,27 +46,36 @@ def test_lattice_counts_and_positions():
 
 
 def test_ceiling_and_floor_returns(paper_cfg):
-    s = _sensor(paper_cfg)
+    s = _sensor(paper_cfg, body_shadowing=False)
     p = s.paths(np.array([2.0, 2.5, 0.0]), np.zeros(2))
     surf = p.select((p.kind == KIND_SURFACE) & (p.order == 1))
     assert np.any(np.isclose(surf.range_m, 4.0 - 0.3))  # ceiling
     assert np.any(np.isclose(surf.range_m, 0.3))  # floor
     assert np.any(np.isclose(surf.range_m, 2.0))  # wall x=0
+    # the robot under the radar hides the floor and the echo between parallel faces
+    p = _sensor(paper_cfg).paths(np.array([2.0, 2.5, 0.0]), np.zeros(2))
+    surf = p.select(p.kind == KIND_SURFACE)
+    assert np.any(np.isclose(surf.range_m, 4.0 - 0.3))
+    assert not np.any(np.isclose(surf.range_m, 0.3))
+    assert not np.any(np.isclose(surf.range_m, 5.0))  # x=0 <-> x=5 and y=0 <-> y=5
+    assert not np.any(np.isclose(surf.range_m, 4.0))  # floor <-> ceiling
 
 
 def test_obstacle_shadows_direct_path(paper_cfg):
-    refl = paper_cfg.reflectors.layout[0].position  # (0.9, 1.3, 3.0)
-    box = {"min": [1.4, 1.2, 0.0], "max": [1.6, 1.4, 2.5]}
+    refl = np.array(paper_cfg.reflectors.layout[0].position)
+    pose = np.array([2.5, 2.5, 0.0])
+    radar = np.array([2.5, 2.5, paper_cfg.radar.mount_height_m])
+    # a thin pillar across the line of sight, halfway between radar and reflector
+    mid = radar + 0.5 * (refl - radar)
+    box = {"min": [mid[0] - 0.1, mid[1] - 0.1, 0.0], "max": [mid[0] + 0.1, mid[1] + 0.1, 3.5]}
     cfg = paper_cfg.with_overrides({"room": {"obstacles": [box]}})
-    s = _sensor(cfg)
-    pose = np.array([2.0, 1.3, 0.0])
-    p = s.paths(pose, np.zeros(2))
+    p = _sensor(cfg).paths(pose, np.zeros(2))
     direct = p.select(p.kind == KIND_DIRECT)
     assert 0 not in direct.reflector_index
     assert {1, 2, 3} <= set(direct.reflector_index.tolist())
     p0 = _sensor(paper_cfg).paths(pose, np.zeros(2))
     d0 = p0.select((p0.kind == KIND_DIRECT) & (p0.reflector_index == 0))
-    assert np.isclose(d0.range_m[0], np.linalg.norm(np.r_[pose[:2], 0.3] - refl))
+    assert np.isclose(d0.range_m[0], np.linalg.norm(radar - refl))
 
 
 @pytest.mark.parametrize("r", [0.6, 3.337, 7.9, 12.41, 18.5])
@@ -114,7 +123,7 @@ def test_cfar_false_alarm_rate(method):
 
 
 def test_rcs_calibration_across_range(paper_cfg):
-    s = _sensor(paper_cfg, noise=False)
+    s = _sensor(paper_cfg, noise=False, antenna_half_power_deg=None)
     fm = s.fmcw
     rng = np.random.default_rng(0)
     for r in np.linspace(0.5, fm.max_range_m - 0.2, 25):
