@@ -44,8 +44,8 @@ def ambiguity(
     """
     from lrp_gym.placement.scenario import analyse_scenario
 
-    if grid_m is not None and grid_m <= 0:
-        raise InputError(f"--grid: must be positive, got {grid_m:g}")
+    if grid_m is not None and not (grid_m > 0 and grid_m < float("inf")):
+        raise InputError(f"--grid: must be a positive finite number, got {grid_m:g}")
     cfg = load_scenario(scenario)
     start = time.perf_counter()
     result = analyse_scenario(cfg, grid_m)

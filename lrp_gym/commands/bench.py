@@ -27,6 +27,8 @@ def bench(
     json_out: bool = typer.Option(False, "--json", help="Print the figures as JSON."),
 ) -> None:
     """Measure speed on one core: radar frames/s, AMCL update time, env steps/s."""
+    if not seconds < float("inf"):  # nan and inf pass typer's min=0.1
+        raise InputError(f"--seconds: must be a finite number, got {seconds:g}")
     names = list(COMPONENTS) if component == "all" else [component]
     unknown = [n for n in names if n not in COMPONENTS]
     if unknown:
