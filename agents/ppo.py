@@ -49,21 +49,34 @@ def load_hyperparams(path: str | Path, env_id: str | None = None) -> tuple[str, 
     Raises
     ------
     InputError
-        Missing or unreadable file, or no section for ``env_id``.
+        Missing, unreadable or non-UTF-8 file, invalid YAML, no section for ``env_id``, or a
+        section that is not a mapping.
     """
     path = Path(path)
     if not path.is_file():
         raise InputError(f"--config: no such file: {path}")
     try:
         data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError as exc:
+        raise InputError(f"--config: {path} is not UTF-8 text: {exc.reason}") from None
+    except OSError as exc:
+        raise InputError(f"--config: cannot read {path}: {exc.strerror or exc}") from None
     except yaml.YAMLError as exc:
         raise InputError(f"--config: {path} is not valid YAML: {exc}") from None
     if not isinstance(data, dict) or not data:
         raise InputError(f"--config: {path} must map env ids to hyperparameters")
     env_id = env_id or next(iter(data))
     if env_id not in data:
-        raise InputError(f"--env: {path} has no section {env_id!r}; sections: {', '.join(data)}")
-    return env_id, dict(data[env_id])
+        raise InputError(
+            f"--env: {path} has no section {env_id!r}; sections: {', '.join(map(str, data))}"
+        )
+    section = data[env_id]
+    if not isinstance(section, dict):
+        raise InputError(
+            f"--config: section {env_id!r} of {path} must be a mapping of hyperparameters, "
+            f"got {type(section).__name__}"
+        )
+    return str(env_id), dict(section)
 
 
 def _schedule(value: Any) -> Any:
@@ -96,9 +109,14 @@ def split_hyperparams(hp: dict[str, Any]) -> dict[str, Any]:
         None), ``env_kwargs``, the lrp-gym extras, and ``ppo`` (kwargs for PPO).
     """
     hp = dict(hp)
+    try:
+        n_envs = int(hp.pop("n_envs", 1))
+        n_timesteps = int(float(hp.pop("n_timesteps", 1e5)))
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"--config: n_envs / n_timesteps must be numbers: {exc}") from None
     out: dict[str, Any] = {
-        "n_envs": int(hp.pop("n_envs", 1)),
-        "n_timesteps": int(float(hp.pop("n_timesteps", 1e5))),
+        "n_envs": n_envs,
+        "n_timesteps": n_timesteps,
         "policy": hp.pop("policy", "MlpPolicy"),
         "env_kwargs": dict(hp.pop("env_kwargs", None) or {}),
     }

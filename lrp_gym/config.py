@@ -368,16 +368,24 @@ class LocalizationConfig(Strict):
     kld_bin_deg: PositiveFloat = 10.0
     motion_noise: MotionNoiseConfig = MotionNoiseConfig()
     measurement_std_m: PositiveFloat = 0.075
-    clutter_probability: Fraction = 0.05
+    measurements: Literal["detections", "tracks"] = Field(
+        default="detections",
+        description="what AMCL weighs: every RCS-gated detection, or the tracked fingerprint",
+    )
+    clutter_probability: Fraction = 0.2
+    structure_probability: Fraction = 0.4
     resample_ess_ratio: Fraction = 0.5
-    alpha_slow: Fraction = 0.001
-    alpha_fast: Fraction = 0.1
-    estimator: Literal["best_k", "cluster"] = "best_k"
+    alpha_slow: Fraction = 0.02
+    alpha_fast: Fraction = 0.3
+    max_random_fraction: Fraction = 0.25
+    recovery_fit_ratio: Annotated[float, Field(gt=0.0, le=1.0)] = 0.8
+    estimator: Literal["best_k", "cluster"] = "cluster"
     estimate_best_k: Annotated[int, Field(ge=1)] = 20
     estimate_radius_m: PositiveFloat = 0.15
     init: Literal["uniform", "gaussian"] = "uniform"
     init_std: Vec3 = [0.3, 0.3, 0.35]
-    converged_std_m: PositiveFloat = 0.15
+    converged_std_m: PositiveFloat = 0.25
+    converged_mass: Annotated[float, Field(gt=0.0, le=1.0)] = 0.9
 
     @model_validator(mode="after")
     def _counts(self) -> LocalizationConfig:

@@ -249,13 +249,19 @@ class LRPRadarNavEnv(gym.Env):
             )
             self.detections = pert.filter_detections(ctx, det, rng)
         self.fingerprint = self.tracker.update(self.detections, self.dt_s)
-        est = self.localizer.update(odometry, self.fingerprint, rng)
+        est = self.localizer.update(odometry, self._amcl_measurements(), rng)
         if self.lut is not None:
             lut_est = self.lut.query(self.fingerprint)
             # The table knows no heading: keep AMCL's.
             pose = np.array([lut_est.pose[0], lut_est.pose[1], est.pose[2]])
             est = PoseEstimate(pose, lut_est.covariance, 0, 0.0, lut_est.converged)
         self.estimate = est
+
+    def _amcl_measurements(self):
+        """What AMCL weighs: every gated detection (default) or the tracked fingerprint."""
+        if self.cfg.localization.measurements == "detections":
+            return self.tracker.gated_fingerprint()
+        return self.fingerprint
 
     def _frame_context(self) -> FrameContext:
         return FrameContext(

@@ -114,7 +114,7 @@ def reproduce(
     if len(cfg.task.path) < 2:
         raise ValueError("the scenario has no path (task.path needs at least 2 waypoints)")
     world = World.from_config(cfg)
-    loc = cfg.localization
+    loc = cfg.localization.model_copy(update={"estimator": "best_k"})  # the paper's rule
     traj = path_trajectory(
         np.asarray(cfg.task.path), cfg.robot.max_speed_mps, cfg.task.frame_period_s
     )
@@ -145,12 +145,17 @@ def reproduce(
                 dets = sensor.measure(pose, vel, rng)
                 t1 = time.perf_counter()
                 fp = tracker.update(dets, cfg.task.frame_period_s)
+            meas = (
+                tracker.gated_fingerprint()
+                if loc.measurements == "detections" and not true_fingerprints
+                else fp
+            )
             t2 = time.perf_counter()
             lut_est = lut.query(fp)
             t3 = time.perf_counter()
             delta = odometry_delta(prev, pose)
             odo = world.odometry_noise.sample(delta, (), rng) if i > 0 else np.zeros(3)
-            est = amcl.update(odo, fp if fp.count else None, rng)
+            est = amcl.update(odo, meas if meas.count else None, rng)
             t4 = time.perf_counter()
             prev = pose
             for key, dt in zip(timing, (t1 - t, t2 - t1, t3 - t2, t4 - t3), strict=True):

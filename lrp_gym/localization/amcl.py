@@ -30,7 +30,12 @@ import numpy as np
 
 from lrp_gym.config import LocalizationConfig
 from lrp_gym.localization.estimate import PoseEstimate
-from lrp_gym.localization.estimators import best_k_mean, cluster_mean, pose_covariance
+from lrp_gym.localization.estimators import (
+    best_k_mean,
+    circular_mean,
+    dominant_cluster,
+    pose_covariance,
+)
 from lrp_gym.localization.kld import KldBinner, kld_particle_count
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.motion import sample_motion
@@ -38,6 +43,9 @@ from lrp_gym.localization.resampling import effective_sample_size, systematic_re
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.robot import OdometryNoise
 from lrp_gym.world.world import World
+
+#: Particles on which the recovery's measurement fit is evaluated (a strided subsample).
+_FIT_SAMPLE = 256
 
 
 class Amcl:
@@ -67,6 +75,8 @@ class Amcl:
             cfg.measurement_std_m,
             cfg.clutter_probability,
             world.fmcw.max_range_m,
+            room=world.room,
+            structure_probability=cfg.structure_probability,
         )
         mn = cfg.motion_noise
         self.motion_noise = OdometryNoise(
@@ -80,6 +90,9 @@ class Amcl:
         self.weights = np.zeros(0)
         self.w_slow = 0.0
         self.w_fast = 0.0
+        self.p_random = 0.0
+        self.n_injected = 0
+        self._n_fits = 0
         self.last_k_bins = 0
 
     # ------------------------------------------------------------------ sampling
@@ -128,6 +141,9 @@ class Amcl:
         self.weights = np.full(n, 1.0 / n)
         self.w_slow = 0.0
         self.w_fast = 0.0
+        self.p_random = 0.0
+        self.n_injected = 0
+        self._n_fits = 0  # fits averaged since reset: the first one sets both averages
 
     # ------------------------------------------------------------------ update
     def update(
@@ -141,16 +157,12 @@ class Amcl:
         self.particles = sample_motion(self.particles, odometry, self.motion_noise, rng)
         w = self.weights * self._free(self.particles)
         if fingerprint is not None and fingerprint.count > 0:
+            self._update_recovery(w, fingerprint)
             loglik = self.model.log_likelihood(self.particles, fingerprint)
             shift = float(np.max(np.where(w > 0.0, loglik, -np.inf)))
             if not np.isfinite(shift):
                 shift = 0.0
             w = w * np.exp(loglik - shift)
-            total = float(np.sum(w))
-            if total > 0.0 and np.isfinite(total):
-                w_avg = total * np.exp(shift)  # weighted mean likelihood (weights summed to 1)
-                self.w_slow += cfg.alpha_slow * (w_avg - self.w_slow)
-                self.w_fast += cfg.alpha_fast * (w_avg - self.w_fast)
         total = float(np.sum(w))
         if not (total > 0.0 and np.isfinite(total)):
             self.particles = self.uniform_particles(len(self.particles), rng)
@@ -159,11 +171,44 @@ class Amcl:
         self.weights = w / total
         ess = effective_sample_size(self.weights)
         estimate = self._estimate(ess)
-        if ess < cfg.resample_ess_ratio * len(self.weights):
+        n = len(self.weights)
+        self.n_injected = 0
+        # Recovery needs a resampling step to inject: force one when it would add a particle.
+        if ess < cfg.resample_ess_ratio * n or self.p_random * n >= 1.0:
             self._resample(rng)
         return PoseEstimate(
             estimate.pose, estimate.covariance, len(self.particles), ess, estimate.converged
         )
+
+    def _update_recovery(self, prior_weights: np.ndarray, fingerprint: Fingerprint) -> None:
+        """Augmented MCL's short- and long-term averages of the measurement fit.
+
+        The averaged quantity is :meth:`FingerprintModel.distance_fit` of the predicted
+        particles rather than their mean likelihood: the likelihood is a product over the
+        measured distances, so its scale changes by orders of magnitude with the number of
+        distances and with one clutter distance, which the averages would read as a kidnap.
+        The fit is evaluated on a strided subsample of at most ``_FIT_SAMPLE`` particles
+        (resampled sets are ordered by ancestor, so the stride is a systematic sample).
+        """
+        cfg = self.cfg
+        stride = max(1, len(prior_weights) // _FIT_SAMPLE)
+        fits = self.model.distance_fits(
+            self.particles[::stride, :2], prior_weights[::stride], fingerprint
+        )
+        if len(fits) == 0:
+            return
+        if len(fits) >= 3:  # a missed reflector plus a clutter distance: leave out the worst
+            fits = np.delete(fits, np.argmin(fits))
+        fit = max(float(np.mean(fits)), 1e-12)
+        # Running means until 1/k falls below alpha (bias-corrected averages): the first
+        # fit initialises both, and the long-term one is not anchored to the low fits of a
+        # uniform prior's first frames.
+        self._n_fits += 1
+        inv_k = 1.0 / self._n_fits
+        self.w_slow += max(cfg.alpha_slow, inv_k) * (fit - self.w_slow)
+        self.w_fast += max(cfg.alpha_fast, inv_k) * (fit - self.w_fast)
+        ratio = self.w_fast / (cfg.recovery_fit_ratio * self.w_slow)
+        self.p_random = min(max(1.0 - ratio, 0.0), cfg.max_random_fraction)
 
     def estimate(self) -> PoseEstimate:
         """The pose estimate of the current particles and weights (no update)."""
@@ -171,32 +216,50 @@ class Amcl:
 
     def _estimate(self, ess: float) -> PoseEstimate:
         cfg = self.cfg
+        sel, mass = dominant_cluster(self.particles, self.weights, cfg.kld_bin_m, self._size_xy)
+        sub = self.particles[sel]
+        w_sel = self.weights[sel]
+        total = float(np.sum(w_sel))
+        w_n = w_sel / total if total > 0.0 else np.full(len(sub), 1.0 / len(sub))
+        mean_xy = w_n @ sub[:, :2]
         if cfg.estimator == "cluster":
-            pose = cluster_mean(self.particles, self.weights, cfg.kld_bin_m, self._size_xy)
+            pose = np.array([mean_xy[0], mean_xy[1], circular_mean(sub[:, 2], w_n)])
         else:
             pose = best_k_mean(
                 self.particles, self.weights, cfg.estimate_best_k, cfg.estimate_radius_m
             )
         cov = pose_covariance(self.particles, self.weights, pose)
-        converged = bool(np.sqrt(max(cov[0, 0] + cov[1, 1], 0.0)) < cfg.converged_std_m)
+        # Converged: one cluster holds (almost) all the weight and is tight about its own mean.
+        # The spread of the whole set about the estimate would count the few particles that
+        # the motion noise scatters away from the mode, and flicker while the error is ~1 cm.
+        spread_m2 = max(float(w_n @ (sub[:, 0] ** 2 + sub[:, 1] ** 2) - mean_xy @ mean_xy), 0.0)
+        converged = bool(mass >= cfg.converged_mass and np.sqrt(spread_m2) < cfg.converged_std_m)
         return PoseEstimate(pose, cov, len(self.particles), ess, converged)
 
-    def _resample(self, rng: np.random.Generator) -> None:
+    def _kld_count(self, k_bins: int) -> int:
         cfg = self.cfg
+        n = kld_particle_count(k_bins, cfg.kld_error, cfg.kld_quantile)
+        return min(max(n, cfg.min_particles), cfg.max_particles)
+
+    def _resample(self, rng: np.random.Generator) -> None:
         n = len(self.weights)
         idx = systematic_resample(self.weights, n, rng)
         self.last_k_bins = self.binner.count(self.particles, idx)
-        n_new = kld_particle_count(self.last_k_bins, cfg.kld_error, cfg.kld_quantile)
-        n_new = int(np.clip(n_new, cfg.min_particles, cfg.max_particles))
+        n_new = self._kld_count(self.last_k_bins)
+        if self.p_random > 0.0:
+            # Fox's incremental KLD draws from the augmented mixture, so the random particles
+            # (almost each in a bin of its own) raise k too: n = n_chi(k + p_random n).
+            for _ in range(32):
+                n_next = self._kld_count(self.last_k_bins + int(self.p_random * n_new))
+                if n_next <= n_new:
+                    break
+                n_new = n_next
         if n_new != n:
             idx = systematic_resample(self.weights, n_new, rng)
         new = np.take(self.particles, idx, axis=0)
-        if self.w_slow > 0.0:
-            p_random = max(0.0, 1.0 - self.w_fast / self.w_slow)
-            n_random = int(rng.binomial(n_new, p_random)) if p_random > 0.0 else 0
-            if n_random:
-                new[rng.choice(n_new, n_random, replace=False)] = self.uniform_particles(
-                    n_random, rng
-                )
+        n_random = int(rng.binomial(n_new, self.p_random)) if self.p_random > 0.0 else 0
+        if n_random:
+            new[rng.choice(n_new, n_random, replace=False)] = self.uniform_particles(n_random, rng)
+        self.n_injected = n_random
         self.particles = new
         self.weights = np.full(n_new, 1.0 / n_new)

@@ -13,6 +13,13 @@ distance is known. Per type ``t`` with ``m`` reflectors and ``n`` measured dista
   probability, or by clutter: ``L_m = prod_i [(1 - c) mean_j N(z_i; e_j, s_i^2) + c / R]``,
   with ``c = clutter_probability`` and ``R`` the radar's maximum range.
 
+The room's own strong returns (ceiling, wall-ceiling edges, walls; see
+:mod:`lrp_gym.world.structure`) are predictable from the map too. With a ``room`` and a
+``structure_probability`` ``s``, the reflector term of each factor becomes
+``(1 - s) mean_j N(z_i; e_j) + s mean_k N(z_i; g_k)`` with ``g_k`` the particle's predicted
+structure ranges, so a reflector-like return of the room counts as evidence for the particles
+that predict it instead of as clutter that any particle may borrow.
+
 When the counts match, ``L = (1 - c)^n L_s + (1 - (1 - c)^n) L_m`` (the probability that no
 distance is clutter weights the exact assignment); when they differ, ``L = L_m``. The clutter
 floor bounds what one wrong distance can cost a particle, and a missed-plus-clutter frame (equal
@@ -29,6 +36,8 @@ import numpy as np
 
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
+from lrp_gym.world.room import Room
+from lrp_gym.world.structure import structure_ranges_m
 
 _LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
 
@@ -75,6 +84,10 @@ class FingerprintModel:
         Probability that a measured distance is clutter (uniform over ``[0, max_range_m]``).
     max_range_m : float
         Support of the clutter density.
+    room : Room, optional
+        The room whose structure returns the model predicts (with ``structure_probability``).
+    structure_probability : float
+        Probability that a measured distance is a structure return of the room.
     """
 
     def __init__(
@@ -84,7 +97,12 @@ class FingerprintModel:
         measurement_std_m: float = 0.075,
         clutter_probability: float = 0.05,
         max_range_m: float = 20.0,
+        room: Room | None = None,
+        structure_probability: float = 0.0,
     ) -> None:
+        self.room = room
+        self.mount_height_m = float(mount_height_m)
+        self.structure_probability = float(structure_probability) if room is not None else 0.0
         self.type_names = layout.type_names
         self._xy = []
         self._dz2 = []
@@ -129,7 +147,9 @@ class FingerprintModel:
         n_pos = xy.shape[0]
         out = np.zeros(n_pos)
         expected = None
+        structure = None
         c = self.clutter_probability
+        s_prob = self.structure_probability
         for name, z, var in zip(
             fingerprint.type_names, fingerprint.distances_m, fingerprint.variances_m2, strict=True
         ):
@@ -166,6 +186,15 @@ class FingerprintModel:
                 continue
             np.exp(r, out=r)
             g = r.mean(axis=1)  # (n, N)
+            if s_prob > 0.0:
+                if structure is None:
+                    structure = structure_ranges_m(self.room, self.mount_height_m, xy).astype(dtype)
+                rs = structure[None, :, :] - z.astype(dtype)[:, None, None]  # (n, 9, N)
+                rs *= rs
+                rs *= half_inv[:, :, None]
+                np.exp(rs, out=rs)
+                g *= dtype(1.0 - s_prob)
+                g += dtype(s_prob) * rs.mean(axis=1)
             g *= ((1.0 - c) * np.exp(log_norm)).astype(dtype)[:, None]
             g += dtype(c * self.clutter_density)
             # Every factor is >= the clutter floor: chunks of 8 cannot underflow in float32.
@@ -177,6 +206,48 @@ class FingerprintModel:
                 continue
             # All n distances are reflectors with probability (1 - c)^n: sorted assignment;
             # otherwise at least one is clutter (and one reflector missed): the mixture.
-            p_clean = (1.0 - c) ** n
+            p_clean = ((1.0 - c) * (1.0 - s_prob)) ** n
             out += np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
         return out
+
+    def distance_fits(
+        self, xy: np.ndarray, weights: np.ndarray, fingerprint: Fingerprint
+    ) -> np.ndarray:
+        """How well the weighted positions explain each measured distance, each in [0, 1].
+
+        For each measured distance (types in fingerprint order, distances in their given
+        order), the weighted mean over the positions ``xy`` (N, 2) of ``exp(-r^2 / (2 s^2))``,
+        with ``r`` the residual to the *nearest* expected distance of its type and ``s^2`` its
+        variance (as in :meth:`log_likelihood`). An exact distance at the true pose scores 1,
+        a clutter distance about 0; a posterior far from the truth scores only the chance
+        coincidences. A type with ``m`` reflectors can explain at most ``m`` distances, so only
+        its ``m`` best fits are kept (the rest are clutter whatever the pose). Returned in
+        descending order per type, types in fingerprint order. Distances of a type the layout
+        lacks are left out; empty if none is left or the weights sum to 0.
+        """
+        total_w = float(np.sum(weights))
+        out: list[np.ndarray] = []
+        if not total_w > 0.0:
+            return np.zeros(0)
+        expected = None
+        for name, z, var in zip(
+            fingerprint.type_names, fingerprint.distances_m, fingerprint.variances_m2, strict=True
+        ):
+            if len(z) == 0 or name not in self.type_names:
+                continue
+            t = self.type_names.index(name)
+            if self.counts[t] == 0:
+                continue
+            if expected is None:
+                expected = self.expected(xy, np.float32)
+            z = np.asarray(z, dtype=np.float32)
+            half_inv = (-0.5 / (self.measurement_var_m2 + np.asarray(var, float))).astype(
+                np.float32
+            )
+            r = expected[t][None, :, :] - z[:, None, None]  # (n, m, N)
+            r *= r
+            r2 = r.min(axis=1)  # squared residual to the nearest expected distance (n, N)
+            r2 *= half_inv[:, None]
+            fits = np.exp(r2, out=r2) @ (weights / total_w)
+            out.append(-np.sort(-fits)[: self.counts[t]])
+        return np.concatenate(out) if out else np.zeros(0)

