@@ -302,7 +302,12 @@ class OdometryNoiseConfig(Strict):
 
     sigma_turn_deg: NonNegFloat = 0.2
     sigma_distance_m: NonNegFloat = 0.002
-    alphas: Annotated[list[NonNegFloat], Field(min_length=4, max_length=4)] = [0.05, 0.01, 0.03, 0.01]
+    alphas: Annotated[list[NonNegFloat], Field(min_length=4, max_length=4)] = [
+        0.05,
+        0.01,
+        0.03,
+        0.01,
+    ]
 
 
 class RobotConfig(Strict):

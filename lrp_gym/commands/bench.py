@@ -21,7 +21,9 @@ COMPONENTS = {
 
 
 def bench(
-    component: str = typer.Option("all", "--component", "-c", help="radar, tracking, amcl, env or all."),
+    component: str = typer.Option(
+        "all", "--component", "-c", help="radar, tracking, amcl, env or all."
+    ),
     scenario: str = typer.Option("ipin2023", help="Scenario for the component benchmarks."),
     seconds: float = typer.Option(3.0, min=0.1, help="Measuring time per figure."),
     json_out: bool = typer.Option(False, "--json", help="Print the figures as JSON."),

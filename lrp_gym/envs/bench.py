@@ -16,7 +16,9 @@ from lrp_gym.envs import ENV_VARIANTS
 _CIRCLE_ACTION = np.array([0.1, 0.5], dtype=np.float32)
 
 
-def converged_steps_per_s(env: gym.Env, seconds: float, warmup_steps: int = 30, seed: int = 0) -> float:
+def converged_steps_per_s(
+    env: gym.Env, seconds: float, warmup_steps: int = 30, seed: int = 0
+) -> float:
     """Steps per second after localisation has converged (resets excluded from the timing)."""
     env.reset(seed=seed)
     for _ in range(warmup_steps):
@@ -57,6 +59,8 @@ def bench_envs(cfg: ScenarioConfig, seconds: float) -> dict:
         }
     fixed = {**path_task, "localization": {"min_particles": 10000, "max_particles": 10000}}
     env = gym.make("LRPRadarNav-v0", scenario=cfg, overrides=fixed).unwrapped
-    out["LRPRadarNav-v0 (fixed 10000 particles)"] = {"steps_per_s": converged_steps_per_s(env, seconds)}
+    out["LRPRadarNav-v0 (fixed 10000 particles)"] = {
+        "steps_per_s": converged_steps_per_s(env, seconds)
+    }
     env.close()
     return {"variants": out}

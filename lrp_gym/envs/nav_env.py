@@ -91,9 +91,15 @@ class LRPRadarNavEnv(gym.Env):
         render_mode: str | None = None,
     ) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}")
+            raise ValueError(
+                f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
+            )
         self.cfg = build_config(
-            scenario, overrides, radar_fidelity=radar_fidelity, observation=observation, task_mode=task_mode
+            scenario,
+            overrides,
+            radar_fidelity=radar_fidelity,
+            observation=observation,
+            task_mode=task_mode,
         )
         self.world = World.from_config(self.cfg)
         self.render_mode = render_mode
@@ -109,14 +115,17 @@ class LRPRadarNavEnv(gym.Env):
         self.localizer = Amcl(self.world, loc)
         self.lut = (
             LookupTable(self.world, loc.lut_resolution_m, loc.lut_grid_m)
-            if loc.method == "lut" else None
+            if loc.method == "lut"
+            else None
         )
         self._obs_type = make_observation(self.cfg.env.observation, self.world.room.size_m)
         self.observation_space = self._obs_type.space
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
         lim = self.world.robot
         self._radius_m = lim.radius_m
-        self._substep_dt = self.dt_s * np.arange(1, self.cfg.env.substeps + 1) / self.cfg.env.substeps
+        self._substep_dt = (
+            self.dt_s * np.arange(1, self.cfg.env.substeps + 1) / self.cfg.env.substeps
+        )
         self._renderer = None
         # Episode state (set in reset).
         self.pose = np.zeros(3)

@@ -58,7 +58,9 @@ def make_observation(cfg: ObservationConfig, room_size_m: np.ndarray) -> Observa
         cls = OBSERVATION_TYPES[cfg.type]
     except KeyError:
         known = ", ".join(sorted(OBSERVATION_TYPES))
-        raise ValueError(f"env.observation.type: unknown {cfg.type!r}; known types: {known}") from None
+        raise ValueError(
+            f"env.observation.type: unknown {cfg.type!r}; known types: {known}"
+        ) from None
     return cls(cfg, room_size_m)
 
 
@@ -104,8 +106,21 @@ class EstimatedPoseObservation(ObservationType):
     def labels(self) -> list[str]:
         n = self.cfg.n_waypoints
         wp = [f"wp{i}_{c}" for i in range(1, n + 1) for c in ("dx", "dy")]
-        return ["x_norm", "y_norm", "cos_theta", "sin_theta", "std_x", "std_y", "std_theta",
-                "converged", *wp, "goal_dx", "goal_dy", "last_speed", "last_turn"]
+        return [
+            "x_norm",
+            "y_norm",
+            "cos_theta",
+            "sin_theta",
+            "std_x",
+            "std_y",
+            "std_theta",
+            "converged",
+            *wp,
+            "goal_dx",
+            "goal_dy",
+            "last_speed",
+            "last_turn",
+        ]
 
     @property
     def space(self) -> spaces.Box:
@@ -153,14 +168,18 @@ class DictObservation(EstimatedPoseObservation):
     def space(self) -> spaces.Dict:
         n, r = self.cfg.n_waypoints, self.reach_m
         f32 = np.float32
-        return spaces.Dict({
-            "pose": spaces.Box(np.array([-0.5, -0.5, -1, -1], f32), np.array([1.5, 1.5, 1, 1], f32)),
-            "pose_std": spaces.Box(0.0, 5.0, (3,), f32),
-            "converged": spaces.Box(0.0, 1.0, (1,), f32),
-            "waypoints": spaces.Box(-r, r, (n, 2), f32),
-            "goal": spaces.Box(-r, r, (2,), f32),
-            "last_action": spaces.Box(-1.0, 1.0, (2,), f32),
-        })
+        return spaces.Dict(
+            {
+                "pose": spaces.Box(
+                    np.array([-0.5, -0.5, -1, -1], f32), np.array([1.5, 1.5, 1, 1], f32)
+                ),
+                "pose_std": spaces.Box(0.0, 5.0, (3,), f32),
+                "converged": spaces.Box(0.0, 1.0, (1,), f32),
+                "waypoints": spaces.Box(-r, r, (n, 2), f32),
+                "goal": spaces.Box(-r, r, (2,), f32),
+                "last_action": spaces.Box(-1.0, 1.0, (2,), f32),
+            }
+        )
 
     def observe(self, snap: NavSnapshot) -> dict[str, np.ndarray]:
         xy, cs, std, conv, wps, goal, act = self._parts(snap)

@@ -33,7 +33,9 @@ class Renderer:
             if matplotlib.get_backend().lower() == "agg":
                 import gymnasium as gym
 
-                gym.logger.warn("render_mode='human' needs a display; the Agg backend draws off-screen")
+                gym.logger.warn(
+                    "render_mode='human' needs a display; the Agg backend draws off-screen"
+                )
             plt.ion()
             self.fig = plt.figure(figsize=(size_px / 100, size_px / 100), dpi=100)
         self.mode = mode
@@ -55,8 +57,14 @@ class Renderer:
         layout = world.layout
         for t, rtype in enumerate(layout.types):
             sel = layout.type_index == t
-            ax.scatter(*layout.positions_m[sel, :2].T, marker="X", s=90, zorder=5,
-                       color=TYPE_COLOURS[t % len(TYPE_COLOURS)], label=f"LRP {rtype.name}")
+            ax.scatter(
+                *layout.positions_m[sel, :2].T,
+                marker="X",
+                s=90,
+                zorder=5,
+                color=TYPE_COLOURS[t % len(TYPE_COLOURS)],
+                label=f"LRP {rtype.name}",
+            )
         path = env.path.waypoints_m
         ax.plot(path[:, 0], path[:, 1], "--", color="0.4", lw=1)
         ax.scatter(*path.T, s=10, color="0.4")
@@ -64,7 +72,9 @@ class Renderer:
         particles = getattr(env.localizer, "particles", None)
         if particles is not None and len(particles):
             step = max(len(particles) // 1500, 1)
-            ax.scatter(particles[::step, 0], particles[::step, 1], s=1, color="tab:orange", alpha=0.4)
+            ax.scatter(
+                particles[::step, 0], particles[::step, 1], s=1, color="tab:orange", alpha=0.4
+            )
         # Tracked distances drawn as floor-plane circles around the reflector they best fit.
         fp = env.fingerprint
         radar = world.radar_position(env.pose[:2])
@@ -77,20 +87,36 @@ class Renderer:
                     j = idx[np.argmin(np.abs(true_d - d))]
                     r = np.sqrt(max(d**2 - dz2[j], 0.0))
                     circ = np.linspace(0, 2 * np.pi, 90)
-                    ax.plot(layout.positions_m[j, 0] + r * np.cos(circ),
-                            layout.positions_m[j, 1] + r * np.sin(circ),
-                            color=TYPE_COLOURS[t % len(TYPE_COLOURS)], lw=0.6, alpha=0.5)
+                    ax.plot(
+                        layout.positions_m[j, 0] + r * np.cos(circ),
+                        layout.positions_m[j, 1] + r * np.sin(circ),
+                        color=TYPE_COLOURS[t % len(TYPE_COLOURS)],
+                        lw=0.6,
+                        alpha=0.5,
+                    )
         x, y, th = env.pose
         ax.add_patch(plt_circle((x, y), world.robot.radius_m, "tab:green"))
-        ax.arrow(x, y, 0.35 * np.cos(th), 0.35 * np.sin(th), width=0.02, color="tab:green", zorder=7)
+        ax.arrow(
+            x, y, 0.35 * np.cos(th), 0.35 * np.sin(th), width=0.02, color="tab:green", zorder=7
+        )
         est = env.estimate
         if est is not None:
             ex, ey, eth = est.pose
             ell = covariance_ellipse(est.covariance[:2, :2]) + est.pose[:2]
             ax.plot(ell[:, 0], ell[:, 1], color="tab:purple", lw=1.5)
-            ax.arrow(ex, ey, 0.3 * np.cos(eth), 0.3 * np.sin(eth), width=0.015, color="tab:purple", zorder=8)
+            ax.arrow(
+                ex,
+                ey,
+                0.3 * np.cos(eth),
+                0.3 * np.sin(eth),
+                width=0.015,
+                color="tab:purple",
+                zorder=8,
+            )
         err = float(np.hypot(*(est.pose[:2] - env.pose[:2]))) if est is not None else float("nan")
-        ax.set_title(f"step {env._steps}  error {err:.3f} m  dets {len(env.detections)}", fontsize=9)
+        ax.set_title(
+            f"step {env._steps}  error {err:.3f} m  dets {len(env.detections)}", fontsize=9
+        )
         ax.legend(loc="upper right", fontsize=7)
         self.fig.canvas.draw()
         if self.mode == "rgb_array":

@@ -80,7 +80,9 @@ class WaypointPath:
         return self.waypoints_m[idx]
 
 
-def _segment_free(room: Room, a: np.ndarray, b: np.ndarray, clearance_m: float, step_m: float) -> bool:
+def _segment_free(
+    room: Room, a: np.ndarray, b: np.ndarray, clearance_m: float, step_m: float
+) -> bool:
     n = max(int(np.ceil(np.linalg.norm(b - a) / step_m)), 1)
     pts = a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a)
     return bool(np.all(room.free(pts, clearance_m)))
@@ -126,8 +128,10 @@ def sample_goal_task(
         corners = [start, goal]
         if not _segment_free(room, start, goal, clearance_m, 0.05):
             via = sample_free_position(room, clearance_m, rng)
-            if not (_segment_free(room, start, via, clearance_m, 0.05)
-                    and _segment_free(room, via, goal, clearance_m, 0.05)):
+            if not (
+                _segment_free(room, start, via, clearance_m, 0.05)
+                and _segment_free(room, via, goal, clearance_m, 0.05)
+            ):
                 continue
             corners = [start, via, goal]
         path = WaypointPath.from_points(densify(np.asarray(corners), g.waypoint_spacing_m))

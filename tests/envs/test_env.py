@@ -65,9 +65,7 @@ def test_collision_terminates_with_penalty():
 
 
 def test_goal_terminates_with_bonus():
-    env = LRPRadarNavEnv(
-        "ipin2023", {"task": {"path": [[0.75, 0.75], [1.25, 0.75]]}}, **FAST
-    )
+    env = LRPRadarNavEnv("ipin2023", {"task": {"path": [[0.75, 0.75], [1.25, 0.75]]}}, **FAST)
     env.reset(seed=0)
     _, reward, term, _, info = env.step(np.array([0.5, 0.0], dtype=np.float32))
     assert term and info["is_success"] and not info["collision"]
@@ -88,8 +86,13 @@ def test_observation_depends_on_estimate_not_truth():
     assert np.array_equal(env._observe(), base)
     env.pose = true_pose
     est = env.estimate
-    env.estimate = PoseEstimate(est.pose + np.array([0.3, 0.2, 0.1]), est.covariance,
-                                est.n_particles, est.ess, est.converged)
+    env.estimate = PoseEstimate(
+        est.pose + np.array([0.3, 0.2, 0.1]),
+        est.covariance,
+        est.n_particles,
+        est.ess,
+        est.converged,
+    )
     assert not np.allclose(env._observe(), base)
 
 
@@ -124,8 +127,18 @@ def test_info_contents_and_float32_observation():
     env = LRPRadarNavEnv(**FAST)
     obs, info = env.reset(seed=0)
     assert obs.dtype == np.float32 and env.observation_space.contains(obs)
-    for key in ("true_pose", "est_pose", "position_error_m", "heading_error_rad", "pose_std",
-                "n_particles", "ess", "n_detections", "converged", "rewards"):
+    for key in (
+        "true_pose",
+        "est_pose",
+        "position_error_m",
+        "heading_error_rad",
+        "pose_std",
+        "n_particles",
+        "ess",
+        "n_detections",
+        "converged",
+        "rewards",
+    ):
         assert key in info
     assert info["n_particles"] > 0
 
@@ -164,8 +177,12 @@ def test_sb3_subproc_vec_env_steps():
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import SubprocVecEnv
 
-    vec = make_vec_env("lrp_gym:LRPRadarNavFast-v0", n_envs=2, vec_env_cls=SubprocVecEnv,
-                       vec_env_kwargs={"start_method": "forkserver"})
+    vec = make_vec_env(
+        "lrp_gym:LRPRadarNavFast-v0",
+        n_envs=2,
+        vec_env_cls=SubprocVecEnv,
+        vec_env_kwargs={"start_method": "forkserver"},
+    )
     obs = vec.reset()
     obs, rew, done, infos = vec.step(np.zeros((2, 2), dtype=np.float32))
     assert obs.shape[0] == 2 and len(infos) == 2

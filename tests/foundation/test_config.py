@@ -127,7 +127,9 @@ def test_each_validation_error_is_clear(patch, expected):
 def test_reflector_inside_obstacle_is_rejected():
     data = paper_dict()
     x, y, z = data["reflectors"]["layout"][0]["position"]
-    data["room"]["obstacles"] = [{"min": [x - 0.1, y - 0.1, z - 0.5], "max": [x + 0.1, y + 0.1, z + 0.5]}]
+    data["room"]["obstacles"] = [
+        {"min": [x - 0.1, y - 0.1, z - 0.5], "max": [x + 0.1, y + 0.1, z + 0.5]}
+    ]
     assert any("inside an obstacle" in p for p in problems_of(data))
 
 

@@ -21,8 +21,15 @@ def test_structure_ranges_follow_the_room(paper_world):
 
 
 def _model(world, s):
-    return FingerprintModel(world.layout, world.mount_height_m, 0.075, 0.2, 20.0,
-                            room=world.room, structure_probability=s)
+    return FingerprintModel(
+        world.layout,
+        world.mount_height_m,
+        0.075,
+        0.2,
+        20.0,
+        room=world.room,
+        structure_probability=s,
+    )
 
 
 def test_structure_return_is_evidence_for_the_pose_that_predicts_it(paper_world):
@@ -31,7 +38,9 @@ def test_structure_return_is_evidence_for_the_pose_that_predicts_it(paper_world)
     fp_true = Fingerprint.from_true(paper_world.layout, paper_world.radar_position(true_xy), 0.02)
     # Add the true pose's wall-ceiling edge return as an extra (reflector-like) distance.
     edge = structure_ranges_m(paper_world.room, paper_world.mount_height_m, true_xy[None])[1, 0]
-    fp = Fingerprint.from_distances(fp_true.type_names, [np.append(fp_true.distances_m[0], edge)], 0.02)
+    fp = Fingerprint.from_distances(
+        fp_true.type_names, [np.append(fp_true.distances_m[0], edge)], 0.02
+    )
     xy = np.stack([true_xy, other_xy])
     with_s = _model(paper_world, 0.4).log_likelihood(xy, fp)
     without = _model(paper_world, 0.0).log_likelihood(xy, fp)
@@ -47,6 +56,7 @@ def test_zero_structure_probability_is_the_plain_model(paper_world):
     xy = rng.uniform(0.5, 4.5, (200, 2))
     fp = Fingerprint.from_distances(("A",), [np.array([2.9, 3.4, 4.4, 5.0, 3.7])], 0.02)
     a = _model(paper_world, 0.0).log_likelihood(xy, fp)
-    b = FingerprintModel(paper_world.layout, paper_world.mount_height_m, 0.075, 0.2, 20.0
-                         ).log_likelihood(xy, fp)
+    b = FingerprintModel(
+        paper_world.layout, paper_world.mount_height_m, 0.075, 0.2, 20.0
+    ).log_likelihood(xy, fp)
     assert np.allclose(a, b)
