@@ -26,24 +26,12 @@ def trajectory_figure(
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.patches import Rectangle
+
+    from lrp_gym.world.plotting import draw_room
 
     lx, ly = world.room.size_m[:2]
     fig, ax = plt.subplots(figsize=(7.6, 6.0 * ly / lx + 0.4))
-    ax.add_patch(Rectangle((0, 0), lx, ly, fill=False, lw=2, color="black"))
-    for box in world.room.obstacles:
-        ax.add_patch(Rectangle(box.min_m[:2], *(box.max_m[:2] - box.min_m[:2]), color="0.6"))
-    layout = world.layout
-    for t, rtype in enumerate(layout.types):
-        sel = layout.type_index == t
-        ax.scatter(
-            *layout.positions_m[sel, :2].T,
-            marker="X",
-            s=110,
-            zorder=5,
-            color=f"C{3 + t}",
-            label=f"LRP type {rtype.name}",
-        )
+    draw_room(ax, world, marker_size=110)
     ax.plot(*waypoints_m.T, "o--", color="0.5", ms=4, lw=1, label="waypoints")
     ax.scatter(
         *waypoints_m[-1], marker="*", s=250, color="gold", edgecolor="k", zorder=6, label="goal"

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-TYPE_COLOURS = ("tab:red", "tab:blue", "tab:green", "tab:purple")
+from lrp_gym.world.plotting import TYPE_COLOURS, draw_room
 
 
 def covariance_ellipse(cov_xy: np.ndarray, n_sigma: float = 2.0, n_points: int = 48) -> np.ndarray:
@@ -43,28 +43,14 @@ class Renderer:
         self.ax = self.fig.add_axes((0.06, 0.06, 0.9, 0.88))
 
     def draw(self, env):
-        from matplotlib.patches import Rectangle
-
         ax, world = self.ax, self.world
         lx, ly = world.room.size_m[:2]
         ax.clear()
         ax.set_xlim(-0.1, lx + 0.1)
         ax.set_ylim(-0.1, ly + 0.1)
         ax.set_aspect("equal")
-        ax.add_patch(Rectangle((0, 0), lx, ly, fill=False, lw=2, color="black"))
-        for box in world.room.obstacles:
-            ax.add_patch(Rectangle(box.min_m[:2], *(box.max_m[:2] - box.min_m[:2]), color="0.6"))
+        draw_room(ax, world)
         layout = world.layout
-        for t, rtype in enumerate(layout.types):
-            sel = layout.type_index == t
-            ax.scatter(
-                *layout.positions_m[sel, :2].T,
-                marker="X",
-                s=90,
-                zorder=5,
-                color=TYPE_COLOURS[t % len(TYPE_COLOURS)],
-                label=f"LRP {rtype.name}",
-            )
         path = env.path.waypoints_m
         ax.plot(path[:, 0], path[:, 1], "--", color="0.4", lw=1)
         ax.scatter(*path.T, s=10, color="0.4")
