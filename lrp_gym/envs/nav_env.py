@@ -258,9 +258,7 @@ class LRPRadarNavEnv(gym.Env):
             )
             self.detections = pert.filter_detections(ctx, det, rng)
         self.fingerprint = self.tracker.update(self.detections, self.dt_s)
-        est = self.localizer.update(
-            odometry, self._amcl_measurements(), rng, fit_fingerprint=self.fingerprint
-        )
+        est = self.localizer.update(odometry, self._amcl_measurements(), rng)
         if self.lut is not None:
             lut_est = self.lut.query(self.fingerprint)
             # The table knows no heading: keep AMCL's.

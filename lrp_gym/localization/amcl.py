@@ -147,28 +147,17 @@ class Amcl:
 
     # ------------------------------------------------------------------ update
     def update(
-        self,
-        odometry: np.ndarray,
-        fingerprint: Fingerprint | None,
-        rng: np.random.Generator,
-        *,
-        fit_fingerprint: Fingerprint | None = None,
+        self, odometry: np.ndarray, fingerprint: Fingerprint | None, rng: np.random.Generator
     ) -> PoseEstimate:
         """Predict with ``odometry`` (rot1, trans, rot2), weight with ``fingerprint`` (None =
-        predict only), estimate, and resample if the effective sample size is low.
-
-        ``fit_fingerprint`` (default: ``fingerprint``) is what the recovery statistic scores.
-        When ``fingerprint`` holds every gated detection, chance coincidences among them keep
-        any pose's fit high; the tracked fingerprint (one distance per reflector) shows a
-        kidnap much more clearly.
-        """
+        predict only), estimate, and resample if the effective sample size is low."""
         if len(self.particles) == 0:
             raise RuntimeError("call reset() before update()")
         cfg = self.cfg
         self.particles = sample_motion(self.particles, odometry, self.motion_noise, rng)
         w = self.weights * self._free(self.particles)
         if fingerprint is not None and fingerprint.count > 0:
-            self._update_recovery(w, fit_fingerprint or fingerprint)
+            self._update_recovery(w, fingerprint)
             loglik = self.model.log_likelihood(self.particles, fingerprint)
             shift = float(np.max(np.where(w > 0.0, loglik, -np.inf)))
             if not np.isfinite(shift):
