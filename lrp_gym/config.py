@@ -378,7 +378,7 @@ class LocalizationConfig(Strict):
         description="what AMCL weighs: every RCS-gated detection, or the tracked fingerprint",
     )
     clutter_probability: Fraction = 0.2
-    structure_probability: Fraction = 0.4
+    structure_probability: Fraction = 0.6
     resample_ess_ratio: Fraction = 0.5
     alpha_slow: Fraction = 0.02
     alpha_fast: Fraction = 0.3

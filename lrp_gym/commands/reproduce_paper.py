@@ -59,6 +59,12 @@ def reproduce_paper(
         "radar", "--fingerprints", help="radar (full chain) or true (bypass radar and tracker)."
     ),
     particles: int | None = typer.Option(None, "--particles", help="Override N0 (and max)."),
+    estimator: str = typer.Option(
+        "cluster",
+        "--estimator",
+        help="AMCL pose estimate: cluster (heaviest cluster, the project default) or best_k "
+        "(the paper's rule: 20 best particles within 15 cm of the best).",
+    ),
     json_path: str | None = typer.Option(
         None, "--json", help="Write the results to this JSON file."
     ),
@@ -72,6 +78,8 @@ def reproduce_paper(
         raise InputError(f"--noise: expected off or on, got {noise!r}")
     if fingerprints not in ("radar", "true"):
         raise InputError(f"--fingerprints: expected radar or true, got {fingerprints!r}")
+    if estimator not in ("cluster", "best_k"):
+        raise InputError(f"--estimator: expected cluster or best_k, got {estimator!r}")
     if particles is not None and particles < 10:
         raise InputError(f"--particles: must be at least 10, got {particles}")
     cfg = load_scenario(scenario)
@@ -94,7 +102,12 @@ def reproduce_paper(
         )
 
     result = reproduce(
-        cfg, runs=runs, seed=seed, progress=progress, true_fingerprints=fingerprints == "true"
+        cfg,
+        runs=runs,
+        seed=seed,
+        progress=progress,
+        true_fingerprints=fingerprints == "true",
+        estimator=estimator,
     )
     data = result.to_dict()
     table = Table(title=f"{cfg.name}: position errors [m] (noise {noise}, {runs} runs)")

@@ -91,6 +91,7 @@ def reproduce(
     seed: int = 0,
     progress: Callable[[int, dict], None] | None = None,
     true_fingerprints: bool = False,
+    estimator: str = "best_k",
 ) -> Reproduction:
     """Run the full chain ``runs`` times along ``cfg.task.path``.
 
@@ -107,6 +108,9 @@ def reproduce(
     true_fingerprints : bool
         Bypass radar and tracker: feed the exact fingerprints (std ``tracking.measurement_std_m``)
         to both methods, to separate positioning from detection errors.
+    estimator : {"best_k", "cluster"}
+        AMCL's pose estimate: the paper's rule (weighted mean of the 20 best particles within
+        15 cm of the best) or the mean of the heaviest cluster.
     """
     from lrp_gym.radar.sensor import RadarSensor
     from lrp_gym.tracking.tracker import LrpTracker
@@ -114,7 +118,7 @@ def reproduce(
     if len(cfg.task.path) < 2:
         raise ValueError("the scenario has no path (task.path needs at least 2 waypoints)")
     world = World.from_config(cfg)
-    loc = cfg.localization.model_copy(update={"estimator": "best_k"})  # the paper's rule
+    loc = cfg.localization.model_copy(update={"estimator": estimator})
     traj = path_trajectory(
         np.asarray(cfg.task.path), cfg.robot.max_speed_mps, cfg.task.frame_period_s
     )
@@ -186,6 +190,8 @@ def reproduce(
             "scenario": cfg.name,
             "noise": bool(cfg.radar.noise),
             "fingerprints": "true" if true_fingerprints else "radar",
+            "estimator": estimator,
+            "measurements": loc.measurements,
             "seed": seed,
             "initial_particles": loc.initial_particles,
             "lut_build_s": lut_build_s,
