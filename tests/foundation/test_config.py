@@ -201,7 +201,9 @@ def mutated(draw):
     for path in draw(st.lists(st.sampled_from(paths), min_size=1, max_size=3)):
         node = data
         for key in path[:-1]:
-            node = node.setdefault(key, {})
+            if not isinstance(node.get(key), dict):
+                node[key] = {}  # an earlier mutation may have replaced the section
+            node = node[key]
         node[path[-1]] = draw(_leaf)
     return data
 
