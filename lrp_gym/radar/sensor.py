@@ -82,13 +82,24 @@ class RadarSensor:
         #: cells at or below this map power are not CFAR-tested (no measurable effect on Pfa)
         self.prethreshold = self.cfar.alpha * self.cfar.prethreshold_fraction * self.noise_cell
         self.min_range_m = radar.min_range_m
-        self.last_map_db: np.ndarray | None = None
+        self._last_map: np.ndarray | None = None
         self.last_paths: Paths | None = None
         self._fast = None
         if self.fidelity == "detections":
             from lrp_gym.radar.fast import FastDetectionModel
 
             self._fast = FastDetectionModel.for_sensor(self)
+
+    @property
+    def last_map_db(self) -> np.ndarray | None:
+        """The last signal-level map in dBm at the antenna (computed on access: the env's step
+        never needs it, plots do)."""
+        if self._last_map is None:
+            return None
+        return (
+            10.0 * np.log10(np.maximum(self._last_map, 1e-30) / self.processor.coherent_gain2)
+            + 30.0
+        )
 
     # ------------------------------------------------------------------ conversions
     def rcs_dbsm(self, power_w: np.ndarray, range_m: np.ndarray) -> np.ndarray:
@@ -140,7 +151,7 @@ class RadarSensor:
         paths = self.paths(pose, velocity_xy_mps, hidden=hidden, extra_scatterers=extra_scatterers)
         self.last_paths = paths
         if self._fast is not None:
-            self.last_map_db = None
+            self._last_map = None
             return self._fast.detect(paths, rng)
         return self.process(paths, rng)
 
@@ -158,9 +169,7 @@ class RadarSensor:
             rng=rng,
         )
         pmap = self.processor.power_map(cube)
-        self.last_map_db = (
-            10.0 * np.log10(np.maximum(pmap, 1e-30) / self.processor.coherent_gain2) + 30.0
-        )
+        self._last_map = pmap
         # Noise-free maps: an ideal known-noise floor keeps float round-off from detecting.
         floor = 0.0 if self.noise_on else -math.log(self.cfar.pfa) * self.noise_cell
         pk = self.processor.peaks(pmap, floor, self.prethreshold)
