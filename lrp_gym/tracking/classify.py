@@ -114,9 +114,13 @@ class LrpClassifier:
             self.half_width_db
         )
 
-    def classify(self, detections: Detections) -> np.ndarray:
-        """Best-fitting type of each detection, ``-1`` for clutter; shape (D,)."""
-        cand = self.candidates(detections)
+    def classify(self, detections: Detections, cand: np.ndarray | None = None) -> np.ndarray:
+        """Best-fitting type of each detection, ``-1`` for clutter; shape (D,).
+
+        ``cand`` is :meth:`candidates` of the same detections, when the caller has it already.
+        """
+        if cand is None:
+            cand = self.candidates(detections)
         if cand.size == 0:
             return np.full(len(detections), -1, dtype=int)
         fit = np.where(cand, self.misfit(detections.rcs_dbsm), np.inf)

@@ -243,7 +243,8 @@ class LrpTracker:
         clutter-aware likelihood (AMCL) uses them all; each goes to its best-fitting type.
         """
         detections, cand = self._gated
-        best = self.classifier.classify(detections) if len(detections) else np.zeros(0, int)
+        # The frame's window test is reused: this runs on every env step.
+        best = self.classifier.classify(detections, cand)
         var = self.cfg.measurement_std_m**2
         dists = tuple(np.sort(detections.range_m[best == t]) for t in range(len(self.type_names)))
         return Fingerprint(
