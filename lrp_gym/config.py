@@ -335,6 +335,14 @@ class TrackingConfig(Strict):
     measurement_std_m: PositiveFloat = 0.02
     velocity_std_mps: PositiveFloat = 0.1
     process_accel_std_mps2: PositiveFloat = 2.0
+    ego_accel_std_mps2: PositiveFloat = Field(
+        default=0.5,
+        description="process noise of the static-point prediction (used with ego motion)",
+    )
+    nis_weight: NonNegFloat = Field(
+        default=0.5,
+        description="how strongly a track's running innovation counts against it as a reflector",
+    )
     gate_probability: Probability = 0.997
     confirm_hits: Annotated[int, Field(ge=1)] = 2
     confirm_window: Annotated[int, Field(ge=1)] = 3

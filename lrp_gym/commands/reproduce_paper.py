@@ -21,27 +21,20 @@ def plot_errors(result: Reproduction, title: str = ""):
 
     pos = np.arange(1, result.lut_errors_m.shape[1] + 1)
     fig, ax = plt.subplots(figsize=(7, 3.5))
-    ax.errorbar(
-        pos,
-        result.lut_errors_m.mean(0),
-        yerr=result.lut_errors_m.std(0),
-        fmt="s",
-        color="tab:orange",
-        capsize=3,
-        label="look-up table",
+    runs = len(result.amcl_errors_m)
+    series = (
+        (result.lut_errors_m, "s", "tab:orange", "look-up table"),
+        (result.amcl_errors_m, "o-", "tab:blue", f"AMCL (mean +- std, {runs} runs)"),
     )
-    ax.errorbar(
-        pos,
-        result.amcl_errors_m.mean(0),
-        yerr=result.amcl_errors_m.std(0),
-        fmt="o-",
-        color="tab:blue",
-        capsize=3,
-        label=f"AMCL (mean +- std, {len(result.amcl_errors_m)} runs)",
-    )
+    for errors, fmt, color, label in series:
+        mean, std = errors.mean(0), errors.std(0)
+        # An error is never negative: the lower whisker stops at zero.
+        yerr = np.vstack([np.minimum(std, mean), std])
+        ax.errorbar(pos, mean, yerr=yerr, fmt=fmt, color=color, capsize=3, label=label)
     ax.set_xlabel("position on the path")
     ax.set_ylabel("position error [m]")
     ax.set_yscale("symlog", linthresh=0.1)
+    ax.set_ylim(bottom=0.0)
     ax.set_xticks(pos)
     ax.grid(True, alpha=0.3)
     ax.legend()

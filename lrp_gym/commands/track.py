@@ -21,19 +21,30 @@ def track(
     scenario: str = typer.Argument(..., help=ScenarioArg),
     seed: int = typer.Option(0, "--seed", help="Seed of the radar noise."),
     json_out: bool = typer.Option(False, "--json", help="Print only the summary as JSON."),
+    prior: bool = typer.Option(
+        True,
+        "--prior/--no-prior",
+        help="Identify the reflectors with AMCL's last estimate moved by the odometry.",
+    ),
+    ego: bool = typer.Option(
+        True,
+        "--ego/--no-ego",
+        help="Predict static points from the odometry (else the paper's constant-velocity model).",
+    ),
 ) -> None:
     """Drive SCENARIO's task.path through the radar chain and the tracker.
 
     Prints, per frame and reflector, the true distance, the matched RCS-gated detection (raw)
     and the tracked distance (* = coasting or not yet confirmed), then the RMSEs, the frames
     with a track swap and the frames where some reflector had no fresh tracked distance.
+    AMCL runs alongside on the gated detections, as in the env; its estimate is the prior.
     """
     from lrp_gym.tracking.evaluate import run_path
 
     cfg = load_scenario(scenario)
     if len(cfg.task.path) < 2:
         raise InputError(f"{scenario}: task.path needs at least two waypoints to drive")
-    run = run_path(cfg, seed)
+    run = run_path(cfg, seed, use_ego=ego, use_prior=prior)
     if json_out:
         print_json(run.summary)
         return

@@ -21,8 +21,10 @@ from lrp_gym.envs.task import WaypointPath, sample_goal_task
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.localization.lut import LookupTable
+from lrp_gym.localization.pipeline import track_and_localize
 from lrp_gym.perturbations import FrameContext, PerturbationSet
 from lrp_gym.radar.sensor import RadarSensor
+from lrp_gym.tracking.motion import EgoMotion
 from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world import World, integrate_unicycle, odometry_delta, wrap_angle
 
@@ -131,6 +133,7 @@ class LRPRadarNavEnv(gym.Env):
         self.pose = np.zeros(3)
         self.path: WaypointPath | None = None
         self.estimate: PoseEstimate | None = None
+        self._amcl_estimate: PoseEstimate | None = None  # the tracker's prior, also in LUT mode
         self.detections = None
         self.fingerprint = None
         self._s_true = self._s_est = 0.0
@@ -152,6 +155,7 @@ class LRPRadarNavEnv(gym.Env):
         self._last_action = np.zeros(2)
         self._steps = 0
         self.tracker.reset()
+        self.estimate = self._amcl_estimate = None
         known = self.pose if self.cfg.localization.init == "gaussian" else None
         self.localizer.reset(rng, pose=known)
         self._s_true = self.path.project(self.pose[:2])
@@ -257,20 +261,26 @@ class LRPRadarNavEnv(gym.Env):
                 self.pose, velocity_xy, rng, hidden=hidden, extra_scatterers=extra
             )
             self.detections = pert.filter_detections(ctx, det, rng)
-        self.fingerprint = self.tracker.update(self.detections, self.dt_s)
-        est = self.localizer.update(odometry, self._amcl_measurements(), rng)
+        heading = np.array([np.cos(self.pose[2]), np.sin(self.pose[2])])
+        ego = EgoMotion(float(velocity_xy @ heading), odometry)
+        self.fingerprint, est = track_and_localize(
+            self.world,
+            self.tracker,
+            self.localizer,
+            self.detections,
+            self.dt_s,
+            ego,
+            self._amcl_estimate,
+            rng,
+            measurements=self.cfg.localization.measurements,
+        )
+        self._amcl_estimate = est
         if self.lut is not None:
             lut_est = self.lut.query(self.fingerprint)
             # The table knows no heading: keep AMCL's.
             pose = np.array([lut_est.pose[0], lut_est.pose[1], est.pose[2]])
             est = PoseEstimate(pose, lut_est.covariance, 0, 0.0, lut_est.converged)
         self.estimate = est
-
-    def _amcl_measurements(self):
-        """What AMCL weighs: every gated detection (default) or the tracked fingerprint."""
-        if self.cfg.localization.measurements == "detections":
-            return self.tracker.gated_fingerprint()
-        return self.fingerprint
 
     def _frame_context(self) -> FrameContext:
         return FrameContext(

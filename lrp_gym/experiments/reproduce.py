@@ -85,6 +85,13 @@ def converged_after(
     return int(bad[-1]) + 2 if bad[-1] + 1 < len(mean_errors_m) else None
 
 
+def _odometry(world: World, prev: np.ndarray, pose: np.ndarray, frame: int, rng) -> np.ndarray:
+    """Noisy odometry from ``prev`` to ``pose`` (zero at the first frame)."""
+    if frame == 0:
+        return np.zeros(3)
+    return world.odometry_noise.sample(odometry_delta(prev, pose), (), rng)
+
+
 def reproduce(
     cfg: ScenarioConfig,
     runs: int = 10,
@@ -112,7 +119,9 @@ def reproduce(
         AMCL's pose estimate: the paper's rule (weighted mean of the 20 best particles within
         15 cm of the best) or the mean of the heaviest cluster.
     """
+    from lrp_gym.localization.pipeline import track_and_localize
     from lrp_gym.radar.sensor import RadarSensor
+    from lrp_gym.tracking.motion import EgoMotion
     from lrp_gym.tracking.tracker import LrpTracker
 
     if len(cfg.task.path) < 2:
@@ -130,7 +139,7 @@ def reproduce(
     lut_err = np.zeros((runs, k))
     amcl_err = np.zeros((runs, k))
     n_part = np.zeros((runs, k), dtype=int)
-    timing = {"radar": 0.0, "tracking": 0.0, "lut": 0.0, "amcl": 0.0}
+    timing = {"radar": 0.0, "tracking_amcl": 0.0, "lut": 0.0}
     children = np.random.SeedSequence(seed).spawn(runs)
     for run in range(runs):
         rng = np.random.default_rng(children[run])
@@ -138,31 +147,37 @@ def reproduce(
         amcl = Amcl(world, loc)
         amcl.reset(rng, traj.poses[0] if loc.init == "gaussian" else None)
         prev = traj.poses[0]
+        est = None
         for i, (pose, vel) in enumerate(zip(traj.poses, traj.velocities_xy_mps, strict=True)):
             t = time.perf_counter()
             if true_fingerprints:
-                t1 = time.perf_counter()
                 fp = Fingerprint.from_true(
                     world.layout, world.radar_position(pose[:2]), cfg.tracking.measurement_std_m
                 )
+                t1 = time.perf_counter()
+                odo = _odometry(world, prev, pose, i, rng)
+                est = amcl.update(odo, fp, rng)
             else:
                 dets = sensor.measure(pose, vel, rng)
                 t1 = time.perf_counter()
-                fp = tracker.update(dets, cfg.task.frame_period_s)
-            meas = (
-                tracker.gated_fingerprint()
-                if loc.measurements == "detections" and not true_fingerprints
-                else fp
-            )
+                odo = _odometry(world, prev, pose, i, rng)
+                speed = float(vel @ np.array([np.cos(pose[2]), np.sin(pose[2])]))
+                fp, est = track_and_localize(
+                    world,
+                    tracker,
+                    amcl,
+                    dets,
+                    cfg.task.frame_period_s,
+                    EgoMotion(speed, odo),
+                    est,
+                    rng,
+                    measurements=loc.measurements,
+                )
             t2 = time.perf_counter()
             lut_est = lut.query(fp)
             t3 = time.perf_counter()
-            delta = odometry_delta(prev, pose)
-            odo = world.odometry_noise.sample(delta, (), rng) if i > 0 else np.zeros(3)
-            est = amcl.update(odo, meas if meas.count else None, rng)
-            t4 = time.perf_counter()
             prev = pose
-            for key, dt in zip(timing, (t1 - t, t2 - t1, t3 - t2, t4 - t3), strict=True):
+            for key, dt in zip(timing, (t1 - t, t2 - t1, t3 - t2), strict=True):
                 timing[key] += dt
             lut_err[run, i] = np.hypot(*(lut_est.pose[:2] - pose[:2]))
             amcl_err[run, i] = np.hypot(*(est.pose[:2] - pose[:2]))

@@ -11,7 +11,9 @@ from lrp_gym.config import ScenarioConfig
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.metrics import SwapCounter, per_type_errors_m
+from lrp_gym.tracking.motion import EgoMotion
 from lrp_gym.tracking.tracker import LrpTracker
+from lrp_gym.world.robot import odometry_delta
 from lrp_gym.world.trajectory import Trajectory, path_trajectory
 from lrp_gym.world.world import World
 
@@ -60,14 +62,39 @@ class TrackRun:
     summary: dict
 
 
-def run_path(cfg: ScenarioConfig, seed: int = 0) -> TrackRun:
+def ego_motions(trajectory: Trajectory, world: World, rng: np.random.Generator) -> list[EgoMotion]:
+    """What the robot's odometry reports at each frame of a drive (noisy, as in the env).
+
+    The speed is the true signed forward speed; the odometry since the previous frame is the
+    true ``(rot1, trans, rot2)`` plus ``world.odometry_noise`` (zero in the first frame).
+    """
+    poses = trajectory.poses
+    heading = np.column_stack([np.cos(poses[:, 2]), np.sin(poses[:, 2])])
+    speed = np.einsum("kj,kj->k", trajectory.velocities_xy_mps, heading)
+    out = [EgoMotion(float(speed[0]), np.zeros(3))]
+    for k in range(1, len(trajectory)):
+        odo = world.odometry_noise.sample(odometry_delta(poses[k - 1], poses[k]), (), rng)
+        out.append(EgoMotion(float(speed[k]), odo))
+    return out
+
+
+def run_path(
+    cfg: ScenarioConfig, seed: int = 0, *, use_ego: bool = True, use_prior: bool = True
+) -> TrackRun:
     """Drive ``cfg.task.path`` at ``cfg.robot.max_speed_mps``, one radar frame per period.
 
     raw RMSE: per frame, the detections inside a type's RCS/range window matched one-to-one
     to that type's true distances; tracked RMSE: the same for the tracker's fingerprint;
     ``swaps``: frames where a confirmed track changed reflector (:class:`SwapCounter`);
     ``missed_frames``: frames where some reflector had no fresh tracked distance.
+    AMCL runs alongside, as in the env (:func:`~lrp_gym.localization.pipeline.track_and_localize`).
+    With ``use_prior`` its prediction identifies the reflectors
+    (:mod:`lrp_gym.tracking.prior`); with ``use_ego`` the tracker gets the
+    robot's (noisy) odometry and predicts static points (:mod:`lrp_gym.tracking.motion`),
+    else the paper's constant-velocity model.
     """
+    from lrp_gym.localization.amcl import Amcl
+    from lrp_gym.localization.pipeline import track_and_localize
     from lrp_gym.radar.sensor import RadarSensor
 
     if len(cfg.task.path) < 2:
@@ -78,6 +105,11 @@ def run_path(cfg: ScenarioConfig, seed: int = 0) -> TrackRun:
     dt = cfg.task.frame_period_s
     traj = path_trajectory(np.asarray(cfg.task.path), cfg.robot.max_speed_mps, dt)
     rng = np.random.default_rng(seed)
+    odo_rng = np.random.default_rng([seed, 1])  # odometry noise apart from the radar's
+    ego = ego_motions(traj, world, odo_rng)
+    amcl = Amcl(world, cfg.localization)
+    amcl.reset(rng, traj.poses[0] if cfg.localization.init == "gaussian" else None)
+    est = None
     ti = world.layout.type_index
     n_types = len(world.layout.types)
     counts = world.layout.counts_per_type()
@@ -90,7 +122,19 @@ def run_path(cfg: ScenarioConfig, seed: int = 0) -> TrackRun:
     missed = 0
     for k in range(len(traj)):
         det = sensor.measure(traj.poses[k], traj.velocities_xy_mps[k], rng)
-        fp = tracker.update(det, dt)
+        fp, est = track_and_localize(
+            world,
+            tracker,
+            amcl,
+            det,
+            dt,
+            ego[k],
+            est,
+            rng,
+            measurements=cfg.localization.measurements,
+            map_aided=use_prior,
+            use_ego=use_ego,
+        )
         cls = tracker.classifier.classify(det)
         gated = tuple(det.range_m[cls == t] for t in range(n_types))
         raw[k] = match_to_truth(gated, truth[k], ti)

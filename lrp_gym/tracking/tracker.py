@@ -48,11 +48,17 @@ from lrp_gym.config import TrackingConfig
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.classify import LrpClassifier, range_limits
 from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.tracking.motion import EgoMotion, predict_static
+from lrp_gym.tracking.prior import DistancePrior
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.world import World
 
 _INFEASIBLE = 1e9  # finite "forbidden" cost: linear_sum_assignment rejects all-inf rows
 _RCS_SMOOTHING = 0.3  # weight of a new RCS estimate in the track's running RCS
+_NIS_SMOOTHING = 0.3  # weight of a new normalised innovation in the track's running mean
+_NIS_EXPECTED = 2.0  # mean of a chi-square with 2 degrees of freedom: a well-modelled track
+_POOL_FACTOR = 3  # persistent returns kept per type, in units of the type's reflector count
+_SELECT_MARGIN = 0.3  # score lead a candidate needs to take over a reported track
 
 
 @dataclass(frozen=True)
@@ -71,13 +77,18 @@ class TrackView:
         Variance of ``distance_m``.
     rcs_dbsm : float
         Running mean of the RCS estimates of the detections the track took.
-    status : {"tentative", "confirmed"}
+    status : {"tentative", "candidate", "confirmed"}
+        ``confirmed``: reported as a reflector; ``candidate``: a persistent return that is
+        not (or no longer) believed to be one; ``tentative``: not yet M-of-N.
     age : int
         Frames since the track started (1 in its first frame).
     misses : int
         Consecutive frames without a detection.
     fresh : bool
         Updated by a detection in this frame.
+    nis : float
+        Running mean of the normalised innovation squared (2 on average for a return that
+        behaves as the motion model predicts).
     """
 
     track_id: int
@@ -87,10 +98,11 @@ class TrackView:
     rate_mps: float
     variance_m2: float
     rcs_dbsm: float
-    status: Literal["tentative", "confirmed"]
+    status: Literal["tentative", "candidate", "confirmed"]
     age: int
     misses: int
     fresh: bool
+    nis: float
 
 
 class _Track:
@@ -105,7 +117,9 @@ class _Track:
         "age",
         "misses",
         "confirmed",
+        "selected",
         "fresh",
+        "nis",
     )
 
     def __init__(self, track_id: int, type_index: int, kf: KalmanFilter, rcs_dbsm: float) -> None:
@@ -116,8 +130,16 @@ class _Track:
         self.hits = 1  # bit i set: hit i frames ago
         self.age = 1
         self.misses = 0
-        self.confirmed = False
+        self.confirmed = False  # passed M of N: a persistent return
+        self.selected = False  # reported as one of its type's reflectors
         self.fresh = True
+        self.nis = _NIS_EXPECTED
+
+    @property
+    def status(self) -> Literal["tentative", "candidate", "confirmed"]:
+        if self.selected:
+            return "confirmed"
+        return "candidate" if self.confirmed else "tentative"
 
 
 class LrpTracker:
@@ -126,12 +148,15 @@ class LrpTracker:
     Parameters
     ----------
     layout : ReflectorLayout
-        Types and peak RCS of the reflectors, and how many of each type there are.
+        Types, peak RCS and positions of the reflectors, and how many of each type there are.
     cfg : TrackingConfig
     max_range_m : float
         No reflector is farther than this (see :func:`~lrp_gym.tracking.classify.range_limits`).
     min_range_m : float
         No reflector is nearer than this.
+    mount_height_m : float
+        Height of the radar above the floor: with the reflector heights, it fixes how far
+        below each reflector the radar passes, which the static-point prediction needs.
     """
 
     def __init__(
@@ -141,6 +166,7 @@ class LrpTracker:
         *,
         max_range_m: float,
         min_range_m: float = 0.0,
+        mount_height_m: float = 0.0,
     ) -> None:
         if not max_range_m > min_range_m >= 0.0:
             raise ValueError("need 0 <= min_range_m < max_range_m")
@@ -151,18 +177,26 @@ class LrpTracker:
             layout, cfg, max_range_m=max_range_m, min_range_m=min_range_m
         )
         self._capacity = layout.counts_per_type()
+        dz = np.abs(layout.positions_m[:, 2] - mount_height_m)
+        types = np.arange(len(self.type_names))
+        self._height_m = np.array([dz[layout.type_index == t].mean() for t in types])
+        self._min_height_m = np.array([dz[layout.type_index == t].min() for t in types])
         self._R = np.diag([cfg.measurement_std_m**2, cfg.velocity_std_mps**2])
         self._gate_range = float(chi2.ppf(cfg.gate_probability, 1))
         self._gate_2d = float(chi2.ppf(cfg.gate_probability, 2))
         self._window_mask = (1 << cfg.confirm_window) - 1
-        self._model_cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+        # Clutter density in the range window is 1 / width: the prior's reference.
+        self._log_window_m = float(np.log(max_range_m - min_range_m))
+        self._model_cache: dict[tuple[float, float], tuple[np.ndarray, np.ndarray]] = {}
         self.reset()
 
     @classmethod
     def from_world(cls, world: World, cfg: TrackingConfig) -> LrpTracker:
         """A tracker whose range window follows from the room, layout and radar height."""
         lo, hi = range_limits(world.layout, world.room.size_m, world.mount_height_m)
-        return cls(world.layout, cfg, max_range_m=hi, min_range_m=lo)
+        return cls(
+            world.layout, cfg, max_range_m=hi, min_range_m=lo, mount_height_m=world.mount_height_m
+        )
 
     # ------------------------------------------------------------------ public API
     def reset(self) -> None:
@@ -170,10 +204,11 @@ class LrpTracker:
         self._gated = (Detections(), np.zeros((0, len(self.type_names)), dtype=bool))
         self._tracks: list[_Track] = []
         self._next_id = 0
+        self._speed_mps: float | None = None  # ego speed at the previous frame
 
     @property
     def tracks(self) -> tuple[TrackView, ...]:
-        """Snapshot of all current tracks (confirmed and tentative), by track id."""
+        """Snapshot of all current tracks (reported, candidate and tentative), by track id."""
         return tuple(
             TrackView(
                 track_id=t.track_id,
@@ -183,15 +218,22 @@ class LrpTracker:
                 rate_mps=float(t.kf.x[1, 0]),
                 variance_m2=float(t.kf.P[0, 0]),
                 rcs_dbsm=float(t.rcs_dbsm),
-                status="confirmed" if t.confirmed else "tentative",
+                status=t.status,
                 age=t.age,
                 misses=t.misses,
                 fresh=t.fresh,
+                nis=float(t.nis),
             )
             for t in self._tracks
         )
 
-    def update(self, detections: Detections, dt_s: float) -> Fingerprint:
+    def update(
+        self,
+        detections: Detections,
+        dt_s: float,
+        ego: EgoMotion | None = None,
+        prior: DistancePrior | None = None,
+    ) -> Fingerprint:
         """Process one radar frame and return the estimated fingerprint.
 
         Parameters
@@ -200,49 +242,69 @@ class LrpTracker:
             This frame's detections (any number, including none).
         dt_s : float
             Time since the previous frame (> 0; ignored in the first frame).
+        ego : EgoMotion, optional
+            The robot's speed now and its odometry since the previous frame. With it, tracks
+            are predicted as static points (:mod:`lrp_gym.tracking.motion`), which is what
+            separates the reflectors from room returns, and detections faster than a
+            reflector at their range can be are not taken. Without it, the constant-velocity
+            model of the paper.
+        prior : DistancePrior, optional
+            Predicted reflector distances from a pose estimate. With it, the reported tracks
+            of a type are those that best match its reflectors' predictions (none is reported
+            for a reflector that no track matches within the gate); without it, the
+            best-scoring persistent tracks.
 
         Returns
         -------
         Fingerprint
-            Per type, sorted distances of the confirmed tracks (plus tentative ones filling
-            free slots, flagged not fresh), their variances and fresh flags.
+            Per type, sorted distances of the reported tracks (plus the best tentative ones
+            filling free slots, flagged not fresh), their variances and fresh flags.
         """
         if not dt_s > 0:
             raise ValueError(f"dt_s must be positive, got {dt_s}")
-        F, Q = self._model(float(dt_s))
+        static = ego is not None and self._speed_mps is not None
+        if static:
+            self._predict_static(float(dt_s), ego)
+        else:
+            self._predict_cv(float(dt_s))
         for t in self._tracks:
-            t.kf.predict(F=F, Q=Q)
             t.fresh = False
+        self._speed_mps = None if ego is None else ego.speed_mps
 
-        cand = self.classifier.candidates(detections)
-        self._gated = (detections, cand)
+        window = self.classifier.candidates(detections)
+        self._gated = (detections, window)
+        cand = window if ego is None else window & self._doppler_ok(detections, ego.speed_mps)
         z = np.column_stack([detections.range_m, detections.velocity_mps])
         free = np.ones(len(detections), dtype=bool)
         explained = np.zeros(len(detections), dtype=bool)
         if self._tracks and len(detections):
-            cost, ok, in_range_gate = self._gate(detections, z, cand)
+            cost, ok, in_range_gate, d2 = self._gate(detections, z, cand, strict_all=static)
             explained = in_range_gate.any(axis=0)
             confirmed = np.array([t.confirmed for t in self._tracks])
-            # Confirmed tracks choose first; tentative ones share what is left.
+            # Persistent returns choose first; tentative ones share what is left.
             for rows in (np.flatnonzero(confirmed), np.flatnonzero(~confirmed)):
                 if len(rows) and free.any():
-                    self._assign(rows, cost, ok & free[None, :], detections, z, free)
+                    self._assign(rows, cost, ok & free[None, :], d2, detections, z, free)
         for t in self._tracks:
             t.age += 1
             t.hits = ((t.hits << 1) | int(t.fresh)) & self._window_mask
             t.misses = 0 if t.fresh else t.misses + 1
         self._births(detections, z, cand, free, explained)
         self._confirm_and_prune()
-        return self._fingerprint()
+        self._select(prior)
+        return self._fingerprint(prior)
 
-    # ------------------------------------------------------------------ steps
-    def gated_fingerprint(self) -> Fingerprint:
-        """This frame's detections that pass a type's RCS and range window, unsmoothed.
+    def gated_fingerprint(self, detections: Detections | None = None) -> Fingerprint:
+        """Detections that pass a type's RCS and range window, unsmoothed.
 
         Every reflector-like detection, not only the tracked ones: a positioning method with a
         clutter-aware likelihood (AMCL) uses them all; each goes to its best-fitting type.
+        Without ``detections``: those of the last :meth:`update`.
         """
-        detections, cand = self._gated
+        if detections is None:
+            detections, cand = self._gated
+        else:
+            cand = self.classifier.candidates(detections)
         # The frame's window test is reused: this runs on every env step.
         best = self.classifier.classify(detections, cand)
         var = self.cfg.measurement_std_m**2
@@ -254,33 +316,78 @@ class LrpTracker:
             tuple(np.ones(len(d), dtype=bool) for d in dists),
         )
 
-    def _model(self, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    # ------------------------------------------------------------------ prediction
+    def _model(self, dt_s: float, accel_std: float) -> tuple[np.ndarray, np.ndarray]:
         """Transition and process noise of the constant-velocity model (cached per dt)."""
-        model = self._model_cache.get(dt_s)
+        key = (dt_s, accel_std)
+        model = self._model_cache.get(key)
         if model is None:
             F = np.array([[1.0, dt_s], [0.0, 1.0]])
-            Q = Q_discrete_white_noise(2, dt=dt_s, var=self.cfg.process_accel_std_mps2**2)
+            Q = Q_discrete_white_noise(2, dt=dt_s, var=accel_std**2)
             model = (F, Q)
             if len(self._model_cache) < 64:
-                self._model_cache[dt_s] = model
+                self._model_cache[key] = model
         return model
 
-    def _gate(
-        self, detections: Detections, z: np.ndarray, cand: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Assignment cost, gate and range-gate matrices (tracks x detections).
+    def _predict_cv(self, dt_s: float) -> None:
+        F, Q = self._model(dt_s, self.cfg.process_accel_std_mps2)
+        for t in self._tracks:
+            t.kf.predict(F=F, Q=Q)
 
-        Confirmed tracks gate on the range (1 degree of freedom) and the loose rate gate;
-        tentative tracks on the 2-D Mahalanobis distance (2 degrees of freedom), so that
-        clutter with random ranges and velocities rarely confirms. The cost is the 2-D
-        Mahalanobis distance plus the squared RCS change from the track's running RCS in
-        units of half the RCS tolerance.
+    def _predict_static(self, dt_s: float, ego: EgoMotion) -> None:
+        """Extended-Kalman prediction of every track as a static point of its type's height."""
+        if not self._tracks:
+            return
+        x = np.array([t.kf.x[:, 0] for t in self._tracks])  # (n, 2)
+        P = np.array([t.kf.P for t in self._tracks])  # (n, 2, 2)
+        h = self._height_m[[t.type_index for t in self._tracks]]
+        prev = float(self._speed_mps)
+        # One call on the state and its two forward-difference neighbours (for the Jacobian).
+        n, eps = len(x), 1e-4
+        xs = np.concatenate([x, x + [eps, 0.0], x + [0.0, eps]])
+        r, v, var_r, var_v = predict_static(xs[:, 0], xs[:, 1], np.tile(h, 3), prev, ego)
+        J = np.empty((n, 2, 2))
+        J[:, 0, 0], J[:, 0, 1] = (r[n : 2 * n] - r[:n]) / eps, (r[2 * n :] - r[:n]) / eps
+        J[:, 1, 0], J[:, 1, 1] = (v[n : 2 * n] - v[:n]) / eps, (v[2 * n :] - v[:n]) / eps
+        r, v, var_r, var_v = r[:n], v[:n], var_r[:n], var_v[:n]
+        _, Q = self._model(dt_s, self.cfg.ego_accel_std_mps2)
+        P = J @ P @ J.transpose(0, 2, 1) + Q
+        P[:, 0, 0] += var_r
+        P[:, 1, 1] += var_v
+        for i, t in enumerate(self._tracks):
+            t.kf.x = np.array([[r[i]], [v[i]]])
+            t.kf.P = P[i]
+
+    def _doppler_ok(self, detections: Detections, speed_mps: float) -> np.ndarray:
+        """Boolean (D, T): the radial velocity is one a static reflector of type t can have.
+
+        A point ``dz`` above the radar at range ``r`` closes at most at
+        ``|u| * sqrt(1 - dz**2 / r**2)``; a wall approached head-on closes at the full speed.
+        """
+        r = np.maximum(detections.range_m[:, None], 1e-6)
+        cos_elev = np.sqrt(np.maximum(1.0 - (self._min_height_m[None, :] / r) ** 2, 0.0))
+        limit = abs(speed_mps) * cos_elev + 3.0 * self.cfg.velocity_std_mps
+        return np.abs(detections.velocity_mps[:, None]) <= limit
+
+    # ------------------------------------------------------------------ association
+    def _gate(
+        self, detections: Detections, z: np.ndarray, cand: np.ndarray, *, strict_all: bool
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Assignment cost, gate, range-gate and Mahalanobis matrices (tracks x detections).
+
+        Tentative tracks gate on the 2-D Mahalanobis distance (2 degrees of freedom), so that
+        clutter with random ranges and velocities rarely confirms; so do all tracks when they
+        are predicted as static points (``strict_all``). With the constant-velocity model,
+        persistent tracks gate on the range (1 degree of freedom) and a loose rate gate: when
+        the robot turns, the radial velocities jump by up to twice the speed within one frame.
+        The cost is the 2-D Mahalanobis distance plus the squared RCS change from the track's
+        running RCS in units of half the RCS tolerance.
         """
         tracks = self._tracks
         x = np.array([t.kf.x[:, 0] for t in tracks])  # (n, 2) predicted state
         S = np.array([t.kf.P for t in tracks]) + self._R  # (n, 2, 2) innovation covariance
         types = np.array([t.type_index for t in tracks])
-        strict = np.array([not t.confirmed for t in tracks])[:, None]
+        strict = np.array([strict_all or not t.confirmed for t in tracks])[:, None]
         rcs = np.array([t.rcs_dbsm for t in tracks])[:, None]
         yr = z[None, :, 0] - x[:, 0, None]
         yv = z[None, :, 1] - x[:, 1, None]
@@ -291,13 +398,14 @@ class LrpTracker:
         loose = in_range_gate & (np.abs(yv) <= self.cfg.rate_gate_mps)
         ok = np.where(strict, type_ok & (d2 <= self._gate_2d), loose)
         cost = d2 + ((detections.rcs_dbsm[None, :] - rcs) / (0.5 * self.cfg.rcs_tolerance_db)) ** 2
-        return cost, ok, in_range_gate
+        return cost, ok, in_range_gate, d2
 
     def _assign(
         self,
         rows: np.ndarray,
         cost: np.ndarray,
         ok: np.ndarray,
+        d2: np.ndarray,
         detections: Detections,
         z: np.ndarray,
         free: np.ndarray,
@@ -311,8 +419,9 @@ class LrpTracker:
         r_idx, c_idx = r_idx[keep], c_idx[keep]
         tracks = [self._tracks[rows[r]] for r in r_idx]
         self._batch_update(tracks, z[c_idx])
-        for t, c in zip(tracks, c_idx, strict=True):
+        for t, r, c in zip(tracks, rows[r_idx], c_idx, strict=True):
             t.rcs_dbsm += _RCS_SMOOTHING * (detections.rcs_dbsm[c] - t.rcs_dbsm)
+            t.nis += _NIS_SMOOTHING * (min(d2[r, c], self._gate_2d) - t.nis)
             t.fresh = True
         free[c_idx] = False
 
@@ -361,13 +470,20 @@ class LrpTracker:
             self._tracks.append(_Track(self._next_id, int(ty), kf, float(detections.rcs_dbsm[d])))
             self._next_id += 1
 
+    # ------------------------------------------------------------------ identification
     def _score(self, t: _Track) -> float:
-        """Rank of a track within its type: hit rate, age, misses and RCS fit."""
+        """How much a track looks like one of its type's reflectors (higher: more).
+
+        Hit rate, age, misses, RCS fit, and how well it follows the motion model: a room
+        return that moves with the robot (ceiling, a wall's specular point) keeps a running
+        normalised innovation well above the 2 of a static reflector.
+        """
         hit_rate = bin(t.hits).count("1") / self.cfg.confirm_window
         misfit = (
             abs(t.rcs_dbsm - self.classifier.centre_dbsm[t.type_index])
             / (self.classifier.half_width_db[t.type_index])
         )
+        excess_nis = max(t.nis - _NIS_EXPECTED, 0.0) / _NIS_EXPECTED
         # Age weighs as much as the hit rate: an established track is not pushed out by a
         # newly confirmed one while it merely coasts through a few missed detections.
         return (
@@ -375,9 +491,11 @@ class LrpTracker:
             + min(t.age, 20) / 20.0
             - t.misses / (self.cfg.max_coast_frames + 1.0)
             - 0.5 * misfit
+            - self.cfg.nis_weight * excess_nis
         )
 
     def _confirm_and_prune(self) -> None:
+        """M-of-N confirmation, deletion, and a bounded pool of tracks per type."""
         cfg = self.cfg
         kept: list[_Track] = []
         for t in self._tracks:
@@ -392,25 +510,78 @@ class LrpTracker:
         for ty, cap in enumerate(self._capacity):
             for confirmed in (True, False):
                 same = [t for t in kept if t.type_index == ty and t.confirmed == confirmed]
-                if len(same) > cap:
-                    same = sorted(same, key=lambda t: (-self._score(t), t.track_id))[:cap]
+                if len(same) > _POOL_FACTOR * cap:
+                    same = sorted(same, key=lambda t: (-self._score(t), t.track_id))
+                    same = same[: _POOL_FACTOR * cap]
                 final.extend(same)
         final.sort(key=lambda t: t.track_id)
         self._tracks = final
 
-    def _fingerprint(self) -> Fingerprint:
+    def _slot_costs(
+        self, tracks: list[_Track], ty: int, prior: DistancePrior | None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Cost (tracks x reflector slots of type ``ty``) of reporting a track in a slot.
+
+        Minus the track's score, minus ``_SELECT_MARGIN`` for a track already reported (so
+        that near-equal scores do not flip the identity back and forth), and, with a prior,
+        minus the log-likelihood ratio of the track's distance under the reflector's predicted
+        distance against clutter spread evenly over the range window. A sharp prediction that
+        fits earns a bonus, one that does not a penalty (beyond the 1-degree-of-freedom gate:
+        forbidden), and a vague prior (a cloud spread over the room) changes little. A prior
+        that is not ``confident`` only forbids.
+        """
+        cap = self._capacity[ty]
+        base = np.array([-self._score(t) - _SELECT_MARGIN * t.selected for t in tracks])
+        cost = np.repeat(base[:, None], cap, axis=1)
+        feasible = np.ones(cost.shape, dtype=bool)
+        if prior is not None:
+            d = np.array([t.kf.x[0, 0] for t in tracks])
+            var = np.array([t.kf.P[0, 0] for t in tracks]) + self.cfg.measurement_std_m**2
+            llr = prior.log_density(ty, d, var) + self._log_window_m
+            if prior.confident:
+                cost = cost - llr
+            feasible = llr >= -0.5 * self._gate_range
+        return cost, feasible
+
+    def _match_slots(
+        self, tracks: list[_Track], ty: int, prior: DistancePrior | None, slots: np.ndarray
+    ) -> list[_Track]:
+        """Tracks filling reflector ``slots`` of type ``ty`` (global-nearest-neighbour)."""
+        if not tracks or not len(slots):
+            return []
+        cost, feasible = self._slot_costs(tracks, ty, prior)
+        cost, feasible = cost[:, slots], feasible[:, slots]
+        rows, cols = linear_sum_assignment(np.where(feasible, cost, _INFEASIBLE))
+        return [tracks[r] for r, c in zip(rows, cols, strict=True) if feasible[r, c]]
+
+    def _select(self, prior: DistancePrior | None) -> None:
+        """Report, per type, the persistent tracks most like its reflectors."""
+        for ty, cap in enumerate(self._capacity):
+            pool = [t for t in self._tracks if t.type_index == ty and t.confirmed]
+            chosen = self._match_slots(pool, ty, prior, np.arange(cap))
+            for t in pool:
+                t.selected = t in chosen
+
+    def _fingerprint(self, prior: DistancePrior | None) -> Fingerprint:
         dists, variances, fresh = [], [], []
         for ty, cap in enumerate(self._capacity):
-            conf = [t for t in self._tracks if t.type_index == ty and t.confirmed]
-            if len(conf) < cap:
-                tent = sorted(
-                    (t for t in self._tracks if t.type_index == ty and not t.confirmed),
-                    key=lambda t: (-self._score(t), t.track_id),
-                )
-                chosen = conf + tent[: cap - len(conf)]
-                flags = [t.fresh for t in conf] + [False] * (len(chosen) - len(conf))
-            else:
-                chosen, flags = conf, [t.fresh for t in conf]
+            sel = [t for t in self._tracks if t.type_index == ty and t.selected]
+            chosen, flags = sel, [t.fresh for t in sel]
+            if len(sel) < cap:
+                # Free slots: tentative tracks, flagged not fresh. With a prior, the free slots
+                # are the reflectors no reported track matches.
+                tent = [t for t in self._tracks if t.type_index == ty and not t.confirmed]
+                free = np.arange(cap - len(sel))
+                if prior is not None:
+                    cost, feasible = self._slot_costs(sel, ty, prior)
+                    taken = set()
+                    if sel:
+                        rows, cols = linear_sum_assignment(np.where(feasible, cost, _INFEASIBLE))
+                        taken = set(cols.tolist())
+                    free = np.array([m for m in range(cap) if m not in taken], dtype=int)
+                extra = self._match_slots(tent, ty, prior, free)
+                chosen = sel + extra
+                flags = flags + [False] * len(extra)
             d = np.array([t.kf.x[0, 0] for t in chosen], dtype=float)
             v = np.array([t.kf.P[0, 0] for t in chosen], dtype=float)
             f = np.array(flags, dtype=bool)

@@ -208,3 +208,105 @@ def test_bad_arguments(paper_cfg, paper_world):
         tracker.update(Detections(), 0.0)
     fp = tracker.update(Detections(), 0.25)
     assert fp.count == 0
+
+
+# ---------------------------------------------------------------- ego motion and map prior
+def exact_ego(trajectory):
+    """Noise-free odometry and speed of a drive (what the tracker's ego input carries)."""
+    from lrp_gym.tracking.motion import EgoMotion
+    from lrp_gym.world.robot import odometry_delta
+
+    poses = trajectory.poses
+    speed = np.linalg.norm(trajectory.velocities_xy_mps, axis=1)
+    odo = [np.zeros(3)] + [odometry_delta(poses[k - 1], poses[k]) for k in range(1, len(poses))]
+    return [EgoMotion(float(s), o) for s, o in zip(speed, odo, strict=True)]
+
+
+def with_extra(frames, extra):
+    """Append one detection per frame: extra[k] = (range, velocity, rcs) or None."""
+    out = []
+    for det, e in zip(frames, extra, strict=True):
+        if e is not None:
+            det = Detections.concatenate([det, Detections([e[0]], [e[1]], [0.0], [e[2]], [20.0])])
+        out.append(det)
+    return out
+
+
+def test_prior_picks_the_reflectors_over_a_static_phantom(two_type_world, loop):
+    """A static point that is no reflector, with the best RCS fit: only the prior rejects it."""
+    from lrp_gym.tracking.prior import DistancePrior
+
+    cfg, world = two_type_world
+    frames, truth = synthetic_stream(world, loop, np.random.default_rng(4), clutter_per_frame=0.0)
+    phantom = np.array([2.5, 2.6, 3.0])
+    radar = world.radar_position(loop.poses[:, :2])
+    diff = radar - phantom
+    r = np.linalg.norm(diff, axis=1)
+    v = np.einsum("kj,kj->k", diff[:, :2], loop.velocities_xy_mps) / r
+    peak_a = world.layout.types[0].rcs_dbsm
+    frames = with_extra(frames, [(r[k], v[k], peak_a - 3.0) for k in range(len(frames))])
+    ti = world.layout.type_index
+    ego = exact_ego(loop)
+
+    def reported_phantom(use_prior):
+        tracker = LrpTracker.from_world(world, cfg.tracking)
+        hits, errors = 0, []
+        for k, det in enumerate(frames):
+            xy = loop.poses[k, :2] + np.array([0.03, -0.02])  # an estimate a few cm off
+            prior = DistancePrior.from_pose(
+                world.layout, world.mount_height_m, xy, np.eye(2) * 0.05**2
+            )
+            fp = tracker.update(det, DT, ego[k], prior if use_prior else None)
+            if k >= 5:
+                hits += (
+                    bool(np.any(np.abs(fp.distances_m[0] - r[k]) < 0.02))
+                    and np.min(np.abs(truth[k, ti == 0] - r[k])) > 0.1
+                )
+                errors.append(per_type_errors_m(fp.distances_m, truth[k], ti))
+        return hits, np.abs(np.concatenate(errors))
+
+    hits_prior, err_prior = reported_phantom(True)
+    hits_free, _ = reported_phantom(False)
+    assert hits_free > 20  # without the map the phantom looks as good as a reflector
+    assert hits_prior == 0
+    assert np.percentile(err_prior, 95) < 0.05
+
+
+def test_ego_motion_rejects_a_wall_approached_head_on(paper_cfg, paper_world):
+    """A return closing at the robot's full speed cannot be a reflector above it."""
+    from lrp_gym.tracking.motion import EgoMotion
+
+    def confirmed(use_ego):
+        tracker = LrpTracker.from_world(paper_world, paper_cfg.tracking)
+        n = 0
+        for k in range(5):
+            r = 4.5 - 0.5 * k  # wall 4.5 m ahead, 2 m/s, 0.25 s frames
+            det = Detections([r], [-2.0], [0.0], [0.0], [20.0])
+            ego = EgoMotion(2.0, [0.0, 0.5 if k else 0.0, 0.0]) if use_ego else None
+            tracker.update(det, 0.25, ego)
+            n += sum(t.status != "tentative" for t in tracker.tracks)
+        return n
+
+    assert confirmed(False) > 0
+    assert confirmed(True) == 0
+
+
+def test_a_return_moving_with_the_robot_scores_as_no_static_point(paper_cfg, paper_world):
+    """The ceiling (constant range, zero Doppler while driving) keeps a high innovation.
+
+    At the paper's 0.5 m between frames; at small steps the one-frame misfit (which grows
+    with the square of the step) drowns in the measurement noise.
+    """
+    traj = path_trajectory([[0.75, 2.0], [4.25, 2.0], [4.25, 4.25]], 2.0, 0.25)
+    frames, truth = synthetic_stream(
+        paper_world, traj, np.random.default_rng(0), miss_probability=0.0, clutter_per_frame=0.0
+    )
+    up = paper_world.room.size_m[2] - paper_world.mount_height_m
+    frames = with_extra(frames, [(up, 0.0, 0.0)] * len(frames))
+    tracker = LrpTracker.from_world(paper_world, paper_cfg.tracking)
+    for det, ego in zip(frames, exact_ego(traj), strict=True):
+        tracker.update(det, 0.25, ego)
+    nis = {round(t.distance_m, 1): t.nis for t in tracker.tracks if t.status != "tentative"}
+    ceiling = nis.pop(round(up, 1))
+    assert len(nis) == 4
+    assert ceiling > 2.0 * max(nis.values())
