@@ -3,7 +3,7 @@
 AMCL can weigh every gated detection (``measurements: detections``) or the tracked fingerprint
 (``tracks``). In the first case it does not need the tracker, so it runs first and its
 posterior cloud identifies the reflectors for the tracker in the same frame; in the second the
-tracker runs first, identified by AMCL's last converged estimate moved by the odometry. The env,
+tracker runs first, identified by AMCL's cloud of the previous frame moved by the odometry. The env,
 ``reproduce-paper`` and ``lrp-gym track`` all go through :func:`track_and_localize`.
 """
 
@@ -16,8 +16,9 @@ from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.motion import EgoMotion
-from lrp_gym.tracking.prior import DistancePrior, prior_from_estimate
+from lrp_gym.tracking.prior import DistancePrior
 from lrp_gym.tracking.tracker import LrpTracker
+from lrp_gym.world.robot import apply_odometry
 from lrp_gym.world.world import World
 
 
@@ -49,7 +50,8 @@ def track_and_localize(
     ego : EgoMotion
         Speed now and odometry since the previous frame (AMCL's motion input too).
     last_estimate : PoseEstimate or None
-        AMCL's estimate of the previous frame (the tracker's prior with ``tracks``).
+        AMCL's estimate of the previous frame: with ``tracks``, whether it had converged
+        decides whether the prior may rank the tracks or only veto them.
     rng : numpy.random.Generator
         AMCL's randomness; the tracker draws none.
     measurements : {"detections", "tracks"}
@@ -86,7 +88,18 @@ def track_and_localize(
             )
         fingerprint = tracker.update(detections, dt_s, tracker_ego, prior)
     else:
-        prior = prior_from_estimate(world, last_estimate, odometry) if map_aided else None
+        prior = None
+        if map_aided:
+            # The cloud before this frame's update, moved by the odometry: AMCL has not seen
+            # this frame, so the tracker's output is not fed its own detections back.
+            moved = apply_odometry(amcl.particles, odometry)
+            prior = DistancePrior.from_particles(
+                world.layout,
+                world.mount_height_m,
+                moved[:, :2],
+                amcl.weights,
+                confident=last_estimate is not None and last_estimate.converged,
+            )
         fingerprint = tracker.update(detections, dt_s, tracker_ego, prior)
         estimate = amcl.update(odometry, fingerprint if fingerprint.count else None, rng)
     return fingerprint, estimate
