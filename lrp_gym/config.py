@@ -340,8 +340,9 @@ class TrackingConfig(Strict):
         description="process noise of the static-point prediction (used with ego motion)",
     )
     nis_weight: NonNegFloat = Field(
-        default=0.5,
-        description="how strongly a track's running innovation counts against it as a reflector",
+        default=0.0,
+        description="how strongly a track's running innovation counts against it as a reflector "
+        "(off by default: on the paper path it made the identification worse, 0.34 -> 0.51 m)",
     )
     gate_probability: Probability = 0.997
     confirm_hits: Annotated[int, Field(ge=1)] = 2

@@ -2,6 +2,16 @@
 
 from lrp_gym.tracking.classify import LrpClassifier, range_limits
 from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.tracking.motion import EgoMotion
+from lrp_gym.tracking.prior import DistancePrior
 from lrp_gym.tracking.tracker import LrpTracker, TrackView
 
-__all__ = ["Fingerprint", "LrpClassifier", "LrpTracker", "TrackView", "range_limits"]
+__all__ = [
+    "DistancePrior",
+    "EgoMotion",
+    "Fingerprint",
+    "LrpClassifier",
+    "LrpTracker",
+    "TrackView",
+    "range_limits",
+]

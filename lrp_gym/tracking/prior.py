@@ -112,7 +112,7 @@ class DistancePrior:
         mount_height_m: float,
         xy_m: np.ndarray,
         weights: np.ndarray,
-        max_hypotheses: int = 256,
+        max_hypotheses: int = 64,
         kernel_std_m: float = PARTICLE_KERNEL_STD_M,
         *,
         confident: bool = True,

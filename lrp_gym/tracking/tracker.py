@@ -1,42 +1,44 @@
 """Track the distances to the reflectors over radar frames and report the fingerprint.
 
-One constant-velocity Kalman filter (:class:`filterpy.kalman.KalmanFilter`) per track, state
+One Kalman filter (:class:`filterpy.kalman.KalmanFilter`) per track, state
 ``(distance_m, rate_mps)``, measurement ``(range_m, velocity_mps)`` of a detection: the radar's
-radial velocity *is* the rate of the distance, so the linear motion model of the paper (next
-distance = distance + rate * dt) is the filter's prediction and the measured velocity corrects
-the rate directly.
+radial velocity *is* the rate of the distance. Without odometry the prediction is the paper's
+linear motion model (next distance = distance + rate * dt); with it (:class:`EgoMotion`), each
+track is predicted as a static point at its type's height (:mod:`lrp_gym.tracking.motion`),
+an extended-Kalman step that is exact while the robot drives straight.
 
 Per frame (:meth:`LrpTracker.update`):
 
-1. predict every track by ``dt_s``;
+1. predict every track;
 2. gate: a detection may feed a track when it passes the RCS/range window of the track's type
-   (:class:`~lrp_gym.tracking.classify.LrpClassifier`), its range innovation passes the
-   chi-square gate of ``gate_probability`` (1 degree of freedom) and its velocity innovation
-   is below ``rate_gate_mps``. The velocity is gated loosely on purpose: when the robot turns,
-   the radial velocities jump by up to twice the speed within one frame, and a strict 2-D gate
-   would drop every reflector at every turn;
+   (:class:`~lrp_gym.tracking.classify.LrpClassifier`), with odometry also the Doppler bound of
+   a static point at that range, and the Mahalanobis gate of ``gate_probability``. Without
+   odometry, persistent tracks gate the range (1 degree of freedom) and the rate only loosely
+   (``rate_gate_mps``): when the robot turns, the radial velocities jump by up to twice the
+   speed within one frame;
 3. assign by global nearest neighbour (:func:`scipy.optimize.linear_sum_assignment`) on the
-   2-D Mahalanobis distance plus an RCS-consistency term, confirmed tracks first, then
+   2-D Mahalanobis distance plus an RCS-consistency term, persistent tracks first, then
    tentative ones on the detections left;
-4. update the assigned filters; unassigned confirmed tracks coast on their prediction (up to
+4. update the assigned filters; unassigned persistent tracks coast on their prediction (up to
    ``max_coast_frames`` misses in a row), tentative tracks must collect ``confirm_hits`` hits
    within ``confirm_window`` frames or are dropped;
 5. start a tentative track on each window-passing detection left over that is not inside the
-   gate of an existing track of the same type (a second peak of a tracked reflector);
-6. keep at most as many confirmed tracks per type as the layout has reflectors of that type,
-   and as many tentative ones, ranked by a score of hit rate, age, misses and RCS fit.
+   range gate of an existing track of a type it may belong to (a second peak of it);
+6. keep a bounded pool of persistent returns per type (reflectors, but also the ceiling, the
+   wall-ceiling edges, multipath);
+7. identify: per type, report the persistent tracks that best fill the type's reflector
+   slots (one assignment problem): track quality and RCS fit, and with a
+   :class:`~lrp_gym.tracking.prior.DistancePrior` the fit to each reflector's predicted
+   distance (map-aided identification; tracks no prediction explains are never reported).
 
-Output: per type, the confirmed tracks' filtered distances, variances and a ``fresh`` flag
-(updated by a detection in this frame). While a type has fewer confirmed tracks than
-reflectors - in the first frames or after losing one - its best tentative tracks fill the
-free slots, flagged not fresh, so positioning has distances from the very first frame;
-consumers that only trust measured distances use :meth:`Fingerprint.fresh_only`.
+Output: per type, the reported tracks' filtered distances, variances and a ``fresh`` flag
+(updated by a detection in this frame); never more than the type has reflectors. Free slots -
+in the first frames or after losing a reflector - are filled with the best tentative tracks,
+flagged not fresh, so positioning has distances from the very first frame; consumers that only
+trust measured distances use :meth:`Fingerprint.fresh_only`.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from filterpy.common import Q_discrete_white_noise
@@ -48,98 +50,15 @@ from lrp_gym.config import TrackingConfig
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.classify import LrpClassifier, range_limits
 from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.tracking.identify import INFEASIBLE, POOL_FACTOR, ReflectorIdentifier
 from lrp_gym.tracking.motion import EgoMotion, predict_static
 from lrp_gym.tracking.prior import DistancePrior
+from lrp_gym.tracking.track import Track, TrackView
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.world import World
 
-_INFEASIBLE = 1e9  # finite "forbidden" cost: linear_sum_assignment rejects all-inf rows
 _RCS_SMOOTHING = 0.3  # weight of a new RCS estimate in the track's running RCS
 _NIS_SMOOTHING = 0.3  # weight of a new normalised innovation in the track's running mean
-_NIS_EXPECTED = 2.0  # mean of a chi-square with 2 degrees of freedom: a well-modelled track
-_POOL_FACTOR = 3  # persistent returns kept per type, in units of the type's reflector count
-_SELECT_MARGIN = 0.3  # score lead a candidate needs to take over a reported track
-
-
-@dataclass(frozen=True)
-class TrackView:
-    """Read-only snapshot of one track, for plotting and debugging.
-
-    Attributes
-    ----------
-    track_id : int
-        Unique within a tracker run (restarts at 0 after :meth:`LrpTracker.reset`).
-    type_index : int
-    type_name : str
-    distance_m, rate_mps : float
-        Filtered state after this frame.
-    variance_m2 : float
-        Variance of ``distance_m``.
-    rcs_dbsm : float
-        Running mean of the RCS estimates of the detections the track took.
-    status : {"tentative", "candidate", "confirmed"}
-        ``confirmed``: reported as a reflector; ``candidate``: a persistent return that is
-        not (or no longer) believed to be one; ``tentative``: not yet M-of-N.
-    age : int
-        Frames since the track started (1 in its first frame).
-    misses : int
-        Consecutive frames without a detection.
-    fresh : bool
-        Updated by a detection in this frame.
-    nis : float
-        Running mean of the normalised innovation squared (2 on average for a return that
-        behaves as the motion model predicts).
-    """
-
-    track_id: int
-    type_index: int
-    type_name: str
-    distance_m: float
-    rate_mps: float
-    variance_m2: float
-    rcs_dbsm: float
-    status: Literal["tentative", "candidate", "confirmed"]
-    age: int
-    misses: int
-    fresh: bool
-    nis: float
-
-
-class _Track:
-    """Mutable track state around one filterpy Kalman filter."""
-
-    __slots__ = (
-        "track_id",
-        "type_index",
-        "kf",
-        "rcs_dbsm",
-        "hits",
-        "age",
-        "misses",
-        "confirmed",
-        "selected",
-        "fresh",
-        "nis",
-    )
-
-    def __init__(self, track_id: int, type_index: int, kf: KalmanFilter, rcs_dbsm: float) -> None:
-        self.track_id = track_id
-        self.type_index = type_index
-        self.kf = kf
-        self.rcs_dbsm = rcs_dbsm
-        self.hits = 1  # bit i set: hit i frames ago
-        self.age = 1
-        self.misses = 0
-        self.confirmed = False  # passed M of N: a persistent return
-        self.selected = False  # reported as one of its type's reflectors
-        self.fresh = True
-        self.nis = _NIS_EXPECTED
-
-    @property
-    def status(self) -> Literal["tentative", "candidate", "confirmed"]:
-        if self.selected:
-            return "confirmed"
-        return "candidate" if self.confirmed else "tentative"
 
 
 class LrpTracker:
@@ -177,6 +96,7 @@ class LrpTracker:
             layout, cfg, max_range_m=max_range_m, min_range_m=min_range_m
         )
         self._capacity = layout.counts_per_type()
+        self.identifier = ReflectorIdentifier(cfg, self.classifier, self._capacity, self.type_names)
         dz = np.abs(layout.positions_m[:, 2] - mount_height_m)
         types = np.arange(len(self.type_names))
         self._height_m = np.array([dz[layout.type_index == t].mean() for t in types])
@@ -185,8 +105,6 @@ class LrpTracker:
         self._gate_range = float(chi2.ppf(cfg.gate_probability, 1))
         self._gate_2d = float(chi2.ppf(cfg.gate_probability, 2))
         self._window_mask = (1 << cfg.confirm_window) - 1
-        # Clutter density in the range window is 1 / width: the prior's reference.
-        self._log_window_m = float(np.log(max_range_m - min_range_m))
         self._model_cache: dict[tuple[float, float], tuple[np.ndarray, np.ndarray]] = {}
         self.reset()
 
@@ -202,7 +120,7 @@ class LrpTracker:
     def reset(self) -> None:
         """Forget every track (a new run)."""
         self._gated = (Detections(), np.zeros((0, len(self.type_names)), dtype=bool))
-        self._tracks: list[_Track] = []
+        self._tracks: list[Track] = []
         self._next_id = 0
         self._speed_mps: float | None = None  # ego speed at the previous frame
 
@@ -290,9 +208,10 @@ class LrpTracker:
             t.hits = ((t.hits << 1) | int(t.fresh)) & self._window_mask
             t.misses = 0 if t.fresh else t.misses + 1
         self._births(detections, z, cand, free, explained)
-        self._confirm_and_prune()
-        self._select(prior)
-        return self._fingerprint(prior)
+        ident = self.identifier
+        self._tracks = ident.prune(self._tracks, POOL_FACTOR if prior is not None else 1)
+        ident.select(self._tracks, prior)
+        return ident.fingerprint(self._tracks, prior)
 
     def gated_fingerprint(self, detections: Detections | None = None) -> Fingerprint:
         """Detections that pass a type's RCS and range window, unsmoothed.
@@ -414,7 +333,7 @@ class LrpTracker:
         sub_ok = ok[rows]
         if not sub_ok.any():
             return
-        r_idx, c_idx = linear_sum_assignment(np.where(sub_ok, cost[rows], _INFEASIBLE))
+        r_idx, c_idx = linear_sum_assignment(np.where(sub_ok, cost[rows], INFEASIBLE))
         keep = sub_ok[r_idx, c_idx]
         r_idx, c_idx = r_idx[keep], c_idx[keep]
         tracks = [self._tracks[rows[r]] for r in r_idx]
@@ -425,7 +344,7 @@ class LrpTracker:
             t.fresh = True
         free[c_idx] = False
 
-    def _batch_update(self, tracks: list[_Track], z: np.ndarray) -> None:
+    def _batch_update(self, tracks: list[Track], z: np.ndarray) -> None:
         """Kalman update of several tracks at once (H = I, Joseph form, as filterpy's update).
 
         One vectorised pass over the assigned tracks costs about as much as a single
@@ -467,126 +386,7 @@ class LrpTracker:
             kf.P = self._R.copy()
             kf.H = np.eye(2)
             kf.R = self._R
-            self._tracks.append(_Track(self._next_id, int(ty), kf, float(detections.rcs_dbsm[d])))
+            self._tracks.append(Track(self._next_id, int(ty), kf, float(detections.rcs_dbsm[d])))
             self._next_id += 1
 
     # ------------------------------------------------------------------ identification
-    def _score(self, t: _Track) -> float:
-        """How much a track looks like one of its type's reflectors (higher: more).
-
-        Hit rate, age, misses, RCS fit, and how well it follows the motion model: a room
-        return that moves with the robot (ceiling, a wall's specular point) keeps a running
-        normalised innovation well above the 2 of a static reflector.
-        """
-        hit_rate = bin(t.hits).count("1") / self.cfg.confirm_window
-        misfit = (
-            abs(t.rcs_dbsm - self.classifier.centre_dbsm[t.type_index])
-            / (self.classifier.half_width_db[t.type_index])
-        )
-        excess_nis = max(t.nis - _NIS_EXPECTED, 0.0) / _NIS_EXPECTED
-        # Age weighs as much as the hit rate: an established track is not pushed out by a
-        # newly confirmed one while it merely coasts through a few missed detections.
-        return (
-            hit_rate
-            + min(t.age, 20) / 20.0
-            - t.misses / (self.cfg.max_coast_frames + 1.0)
-            - 0.5 * misfit
-            - self.cfg.nis_weight * excess_nis
-        )
-
-    def _confirm_and_prune(self) -> None:
-        """M-of-N confirmation, deletion, and a bounded pool of tracks per type."""
-        cfg = self.cfg
-        kept: list[_Track] = []
-        for t in self._tracks:
-            if not t.confirmed and bin(t.hits).count("1") >= cfg.confirm_hits:
-                t.confirmed = True
-            if t.confirmed and t.misses > cfg.max_coast_frames:
-                continue
-            if not t.confirmed and t.age >= cfg.confirm_window:
-                continue  # could not collect its hits within the window
-            kept.append(t)
-        final: list[_Track] = []
-        for ty, cap in enumerate(self._capacity):
-            for confirmed in (True, False):
-                same = [t for t in kept if t.type_index == ty and t.confirmed == confirmed]
-                if len(same) > _POOL_FACTOR * cap:
-                    same = sorted(same, key=lambda t: (-self._score(t), t.track_id))
-                    same = same[: _POOL_FACTOR * cap]
-                final.extend(same)
-        final.sort(key=lambda t: t.track_id)
-        self._tracks = final
-
-    def _slot_costs(
-        self, tracks: list[_Track], ty: int, prior: DistancePrior | None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Cost (tracks x reflector slots of type ``ty``) of reporting a track in a slot.
-
-        Minus the track's score, minus ``_SELECT_MARGIN`` for a track already reported (so
-        that near-equal scores do not flip the identity back and forth), and, with a prior,
-        minus the log-likelihood ratio of the track's distance under the reflector's predicted
-        distance against clutter spread evenly over the range window. A sharp prediction that
-        fits earns a bonus, one that does not a penalty (beyond the 1-degree-of-freedom gate:
-        forbidden), and a vague prior (a cloud spread over the room) changes little. A prior
-        that is not ``confident`` only forbids.
-        """
-        cap = self._capacity[ty]
-        base = np.array([-self._score(t) - _SELECT_MARGIN * t.selected for t in tracks])
-        cost = np.repeat(base[:, None], cap, axis=1)
-        feasible = np.ones(cost.shape, dtype=bool)
-        if prior is not None:
-            d = np.array([t.kf.x[0, 0] for t in tracks])
-            var = np.array([t.kf.P[0, 0] for t in tracks]) + self.cfg.measurement_std_m**2
-            llr = prior.log_density(ty, d, var) + self._log_window_m
-            if prior.confident:
-                cost = cost - llr
-            feasible = llr >= -0.5 * self._gate_range
-        return cost, feasible
-
-    def _match_slots(
-        self, tracks: list[_Track], ty: int, prior: DistancePrior | None, slots: np.ndarray
-    ) -> list[_Track]:
-        """Tracks filling reflector ``slots`` of type ``ty`` (global-nearest-neighbour)."""
-        if not tracks or not len(slots):
-            return []
-        cost, feasible = self._slot_costs(tracks, ty, prior)
-        cost, feasible = cost[:, slots], feasible[:, slots]
-        rows, cols = linear_sum_assignment(np.where(feasible, cost, _INFEASIBLE))
-        return [tracks[r] for r, c in zip(rows, cols, strict=True) if feasible[r, c]]
-
-    def _select(self, prior: DistancePrior | None) -> None:
-        """Report, per type, the persistent tracks most like its reflectors."""
-        for ty, cap in enumerate(self._capacity):
-            pool = [t for t in self._tracks if t.type_index == ty and t.confirmed]
-            chosen = self._match_slots(pool, ty, prior, np.arange(cap))
-            for t in pool:
-                t.selected = t in chosen
-
-    def _fingerprint(self, prior: DistancePrior | None) -> Fingerprint:
-        dists, variances, fresh = [], [], []
-        for ty, cap in enumerate(self._capacity):
-            sel = [t for t in self._tracks if t.type_index == ty and t.selected]
-            chosen, flags = sel, [t.fresh for t in sel]
-            if len(sel) < cap:
-                # Free slots: tentative tracks, flagged not fresh. With a prior, the free slots
-                # are the reflectors no reported track matches.
-                tent = [t for t in self._tracks if t.type_index == ty and not t.confirmed]
-                free = np.arange(cap - len(sel))
-                if prior is not None:
-                    cost, feasible = self._slot_costs(sel, ty, prior)
-                    taken = set()
-                    if sel:
-                        rows, cols = linear_sum_assignment(np.where(feasible, cost, _INFEASIBLE))
-                        taken = set(cols.tolist())
-                    free = np.array([m for m in range(cap) if m not in taken], dtype=int)
-                extra = self._match_slots(tent, ty, prior, free)
-                chosen = sel + extra
-                flags = flags + [False] * len(extra)
-            d = np.array([t.kf.x[0, 0] for t in chosen], dtype=float)
-            v = np.array([t.kf.P[0, 0] for t in chosen], dtype=float)
-            f = np.array(flags, dtype=bool)
-            order = np.argsort(d, kind="stable")
-            dists.append(d[order])
-            variances.append(v[order])
-            fresh.append(f[order])
-        return Fingerprint(self.type_names, tuple(dists), tuple(variances), tuple(fresh))

@@ -303,9 +303,20 @@ def test_a_return_moving_with_the_robot_scores_as_no_static_point(paper_cfg, pap
     )
     up = paper_world.room.size_m[2] - paper_world.mount_height_m
     frames = with_extra(frames, [(up, 0.0, 0.0)] * len(frames))
+    # A vague prior (particles all over the room) keeps the candidate pool without ranking.
+    from lrp_gym.tracking.prior import DistancePrior
+
+    grid = np.stack(np.meshgrid(np.linspace(0.3, 4.7, 12), np.linspace(0.3, 4.7, 12)), -1)
+    vague = DistancePrior.from_particles(
+        paper_world.layout,
+        paper_world.mount_height_m,
+        grid.reshape(-1, 2),
+        np.ones(144),
+        confident=False,
+    )
     tracker = LrpTracker.from_world(paper_world, paper_cfg.tracking)
     for det, ego in zip(frames, exact_ego(traj), strict=True):
-        tracker.update(det, 0.25, ego)
+        tracker.update(det, 0.25, ego, vague)
     nis = {round(t.distance_m, 1): t.nis for t in tracker.tracks if t.status != "tentative"}
     ceiling = nis.pop(round(up, 1))
     assert len(nis) == 4

@@ -1,0 +1,93 @@
+"""One track's state, and the read-only view of it that the tracker hands out."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from filterpy.kalman import KalmanFilter
+
+NIS_EXPECTED = 2.0  # mean of a chi-square with 2 degrees of freedom: a well-modelled track
+
+
+@dataclass(frozen=True)
+class TrackView:
+    """Read-only snapshot of one track, for plotting and debugging.
+
+    Attributes
+    ----------
+    track_id : int
+        Unique within a tracker run (restarts at 0 after :meth:`LrpTracker.reset`).
+    type_index : int
+    type_name : str
+    distance_m, rate_mps : float
+        Filtered state after this frame.
+    variance_m2 : float
+        Variance of ``distance_m``.
+    rcs_dbsm : float
+        Running mean of the RCS estimates of the detections the track took.
+    status : {"tentative", "candidate", "confirmed"}
+        ``confirmed``: reported as a reflector; ``candidate``: a persistent return that is
+        not (or no longer) believed to be one; ``tentative``: not yet M-of-N.
+    age : int
+        Frames since the track started (1 in its first frame).
+    misses : int
+        Consecutive frames without a detection.
+    fresh : bool
+        Updated by a detection in this frame.
+    nis : float
+        Running mean of the normalised innovation squared (2 on average for a return that
+        behaves as the motion model predicts).
+    """
+
+    track_id: int
+    type_index: int
+    type_name: str
+    distance_m: float
+    rate_mps: float
+    variance_m2: float
+    rcs_dbsm: float
+    status: Literal["tentative", "candidate", "confirmed"]
+    age: int
+    misses: int
+    fresh: bool
+    nis: float
+
+
+class Track:
+    """Mutable track state around one filterpy Kalman filter."""
+
+    __slots__ = (
+        "track_id",
+        "type_index",
+        "kf",
+        "rcs_dbsm",
+        "hits",
+        "age",
+        "misses",
+        "confirmed",
+        "selected",
+        "fresh",
+        "nis",
+        "slot",
+    )
+
+    def __init__(self, track_id: int, type_index: int, kf: KalmanFilter, rcs_dbsm: float) -> None:
+        self.track_id = track_id
+        self.type_index = type_index
+        self.kf = kf
+        self.rcs_dbsm = rcs_dbsm
+        self.hits = 1  # bit i set: hit i frames ago
+        self.age = 1
+        self.misses = 0
+        self.confirmed = False  # passed M of N: a persistent return
+        self.selected = False  # reported as one of its type's reflectors
+        self.fresh = True
+        self.nis = NIS_EXPECTED
+        self.slot = -1  # reflector slot of its type while reported
+
+    @property
+    def status(self) -> Literal["tentative", "candidate", "confirmed"]:
+        if self.selected:
+            return "confirmed"
+        return "candidate" if self.confirmed else "tentative"
