@@ -78,9 +78,9 @@ class ReflectorIdentifier:
     def prune(self, tracks: list[Track], pool_factor: int) -> list[Track]:
         """M-of-N confirmation, deletion, and a bounded pool of tracks per type.
 
-        With a prior to choose among them, up to ``_POOL_FACTOR`` times as many persistent
-        returns as reflectors are kept; without one, as many as reflectors (the paper's rule:
-        more candidates would only add chances to report a room return).
+        ``pool_factor`` times as many persistent returns as reflectors are kept: the tracker
+        passes ``POOL_FACTOR`` with a confident prior to choose among them, else 1 (the
+        paper's rule: more candidates would only add chances to report a room return).
         """
         cfg = self.cfg
         kept: list[Track] = []

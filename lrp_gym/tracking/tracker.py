@@ -209,7 +209,9 @@ class LrpTracker:
             t.misses = 0 if t.fresh else t.misses + 1
         self._births(detections, z, cand, free, explained)
         ident = self.identifier
-        self._tracks = ident.prune(self._tracks, POOL_FACTOR if prior is not None else 1)
+        self._tracks = ident.prune(
+            self._tracks, POOL_FACTOR if prior is not None and prior.confident else 1
+        )
         ident.select(self._tracks, prior)
         return ident.fingerprint(self._tracks, prior)
 

@@ -303,7 +303,7 @@ def test_a_return_moving_with_the_robot_scores_as_no_static_point(paper_cfg, pap
     )
     up = paper_world.room.size_m[2] - paper_world.mount_height_m
     frames = with_extra(frames, [(up, 0.0, 0.0)] * len(frames))
-    # A vague prior (particles all over the room) keeps the candidate pool without ranking.
+    # A vague prior (particles all over the room) keeps the candidate pool; it barely ranks.
     from lrp_gym.tracking.prior import DistancePrior
 
     grid = np.stack(np.meshgrid(np.linspace(0.3, 4.7, 12), np.linspace(0.3, 4.7, 12)), -1)
@@ -312,7 +312,6 @@ def test_a_return_moving_with_the_robot_scores_as_no_static_point(paper_cfg, pap
         paper_world.mount_height_m,
         grid.reshape(-1, 2),
         np.ones(144),
-        confident=False,
     )
     tracker = LrpTracker.from_world(paper_world, paper_cfg.tracking)
     for det, ego in zip(frames, exact_ego(traj), strict=True):
