@@ -386,6 +386,12 @@ class LocalizationConfig(Strict):
         default="detections",
         description="what AMCL weighs: every RCS-gated detection, or the tracked fingerprint",
     )
+    recovery_measurements: Literal["detections", "tracks"] = Field(
+        default="tracks",
+        description="what augmented MCL's fit statistic scores: the measurements AMCL weighs, "
+        "or the tracker's persistent tracks updated in this frame (default: one-frame "
+        "clutter does not keep a lost filter's fit up)",
+    )
     clutter_probability: Fraction = 0.2
     structure_probability: Fraction = 0.6
     resample_ess_ratio: Fraction = 0.5

@@ -93,6 +93,7 @@ class Amcl:
         self.p_random = 0.0
         self.n_injected = 0
         self._n_fits = 0
+        self._predicted: tuple[np.ndarray, np.ndarray] | None = None
         self.last_k_bins = 0
 
     # ------------------------------------------------------------------ sampling
@@ -144,20 +145,33 @@ class Amcl:
         self.p_random = 0.0
         self.n_injected = 0
         self._n_fits = 0  # fits averaged since reset: the first one sets both averages
+        self._predicted = None
 
     # ------------------------------------------------------------------ update
     def update(
-        self, odometry: np.ndarray, fingerprint: Fingerprint | None, rng: np.random.Generator
+        self,
+        odometry: np.ndarray,
+        fingerprint: Fingerprint | None,
+        rng: np.random.Generator,
+        *,
+        recovery: bool = True,
     ) -> PoseEstimate:
         """Predict with ``odometry`` (rot1, trans, rot2), weight with ``fingerprint`` (None =
-        predict only), estimate, and resample if the effective sample size is low."""
+        predict only), estimate, and resample if the effective sample size is low.
+
+        With ``recovery=False`` the fit statistic of augmented MCL is not taken from
+        ``fingerprint``; the caller passes another one to :meth:`update_recovery` (scored on
+        the same predicted cloud) before the next update.
+        """
         if len(self.particles) == 0:
             raise RuntimeError("call reset() before update()")
         cfg = self.cfg
         self.particles = sample_motion(self.particles, odometry, self.motion_noise, rng)
         w = self.weights * self._free(self.particles)
+        self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
-            self._update_recovery(w, fingerprint)
+            if recovery:
+                self._update_recovery(w, fingerprint)
             loglik = self.model.log_likelihood(self.particles, fingerprint)
             shift = float(np.max(np.where(w > 0.0, loglik, -np.inf)))
             if not np.isfinite(shift):
@@ -179,6 +193,18 @@ class Amcl:
         return PoseEstimate(
             estimate.pose, estimate.covariance, len(self.particles), ess, estimate.converged
         )
+
+    def update_recovery(self, fingerprint: Fingerprint) -> None:
+        """Score the last update's predicted cloud on ``fingerprint`` (see ``recovery``)."""
+        if self._predicted is None or fingerprint.count == 0:
+            return
+        particles, weights = self._predicted
+        current = self.particles
+        self.particles = particles  # _update_recovery scores self.particles
+        try:
+            self._update_recovery(weights, fingerprint)
+        finally:
+            self.particles = current
 
     def _update_recovery(self, prior_weights: np.ndarray, fingerprint: Fingerprint) -> None:
         """Augmented MCL's short- and long-term averages of the measurement fit.

@@ -72,9 +72,12 @@ def track_and_localize(
     """
     odometry = ego.odometry
     tracker_ego = ego if use_ego else None
+    # Augmented MCL's fit statistic: on what AMCL weighs, or on the persistent tracks, scored
+    # on the same predicted cloud once the tracker has run.
+    own_fit = amcl.cfg.recovery_measurements == "detections"
     if measurements == "detections":
         gated = tracker.gated_fingerprint(detections)
-        estimate = amcl.update(odometry, gated if gated.count else None, rng)
+        estimate = amcl.update(odometry, gated if gated.count else None, rng, recovery=own_fit)
         prior = None
         if map_aided:
             # The posterior cloud of this frame, thinned; it ranks the tracks only once
@@ -101,5 +104,11 @@ def track_and_localize(
                 confident=last_estimate is not None and last_estimate.converged,
             )
         fingerprint = tracker.update(detections, dt_s, tracker_ego, prior)
-        estimate = amcl.update(odometry, fingerprint if fingerprint.count else None, rng)
+        estimate = amcl.update(
+            odometry, fingerprint if fingerprint.count else None, rng, recovery=own_fit
+        )
+    if not own_fit:
+        # Tracks updated in this frame only: a coasting track follows the odometry, as a
+        # lost filter's cloud does, and would keep its fit up after a kidnap.
+        amcl.update_recovery(tracker.persistent_fingerprint(max_misses=0))
     return fingerprint, estimate

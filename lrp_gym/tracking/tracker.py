@@ -215,6 +215,32 @@ class LrpTracker:
         ident.select(self._tracks, prior)
         return ident.fingerprint(self._tracks, prior)
 
+    def persistent_fingerprint(self, max_misses: int | None = None) -> Fingerprint:
+        """Every persistent (M-of-N confirmed) track, reported or not, per type.
+
+        More distances than reflectors: the ones a positioning method cannot explain are the
+        room's returns. Unlike the gated detections, one-frame clutter is not in it, so a fit
+        statistic on it drops clearly when the pose hypothesis is wrong (kidnap detection).
+        ``max_misses`` leaves out tracks that have coasted for more frames in a row: a
+        coasting track follows the odometry, as a wrong pose hypothesis does.
+        """
+        dists, variances, fresh = [], [], []
+        for ty in range(len(self.type_names)):
+            tracks = sorted(
+                (
+                    t
+                    for t in self._tracks
+                    if t.type_index == ty
+                    and t.confirmed
+                    and (max_misses is None or t.misses <= max_misses)
+                ),
+                key=lambda t: t.kf.x[0, 0],
+            )
+            dists.append(np.array([t.kf.x[0, 0] for t in tracks], dtype=float))
+            variances.append(np.array([t.kf.P[0, 0] for t in tracks], dtype=float))
+            fresh.append(np.array([t.fresh for t in tracks], dtype=bool))
+        return Fingerprint(self.type_names, tuple(dists), tuple(variances), tuple(fresh))
+
     def gated_fingerprint(self, detections: Detections | None = None) -> Fingerprint:
         """Detections that pass a type's RCS and range window, unsmoothed.
 

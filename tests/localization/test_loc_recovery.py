@@ -208,3 +208,25 @@ def test_dominant_cluster_mass_and_mask():
     assert sel[:300].all() and not sel[300:].any()
     _, flat = dominant_cluster(np.vstack([a, b]), np.zeros(400), 0.1, np.array([5.0, 5.0]))
     assert flat == 0.0
+
+
+def test_recovery_scored_later_on_another_fingerprint_equals_in_update(room):
+    """update(recovery=False) + update_recovery(fp) is update(fp)'s statistic, deferred."""
+    world, loc = room
+    loc = loc.model_copy(update={"initial_particles": 500, "max_particles": 500})
+    pose = _pose(0.3)
+    fp = Fingerprint.from_true(world.layout, world.radar_position(pose[:2]), 0.05)
+    odo = np.array([0.0, 0.5, 0.1])
+    stats = []
+    for deferred in (False, True):
+        amcl = Amcl(world, loc)
+        rng = np.random.default_rng(0)
+        amcl.reset(rng, pose)
+        for _ in range(3):
+            amcl.update(odo, fp, rng, recovery=not deferred)
+            if deferred:
+                before = (amcl.w_fast, amcl.w_slow)
+                amcl.update_recovery(fp)
+                assert (amcl.w_fast, amcl.w_slow) != before  # the deferred call scored it
+        stats.append((amcl.w_fast, amcl.w_slow, amcl.p_random))
+    np.testing.assert_allclose(stats[0], stats[1])

@@ -320,3 +320,25 @@ def test_a_return_moving_with_the_robot_scores_as_no_static_point(paper_cfg, pap
     ceiling = nis.pop(round(up, 1))
     assert len(nis) == 4
     assert ceiling > 2.0 * max(nis.values())
+
+
+def test_persistent_fingerprint_holds_every_persistent_return(paper_cfg, paper_world):
+    """Reflectors plus a steady room return: all persistent, only the reflectors reported."""
+    from lrp_gym.tracking.prior import DistancePrior
+
+    traj = path_trajectory([[0.75, 2.0], [4.25, 2.0]], 2.0, 0.25)
+    frames, truth = synthetic_stream(
+        paper_world, traj, np.random.default_rng(0), miss_probability=0.0, clutter_per_frame=0.0
+    )
+    up = paper_world.room.size_m[2] - paper_world.mount_height_m
+    frames = with_extra(frames, [(up, 0.0, 0.0)] * len(frames))
+    tracker = LrpTracker.from_world(paper_world, paper_cfg.tracking)
+    for k, (det, ego) in enumerate(zip(frames, exact_ego(traj), strict=True)):
+        prior = DistancePrior.from_pose(
+            paper_world.layout, paper_world.mount_height_m, traj.poses[k, :2], np.eye(2) * 1e-3
+        )
+        fp = tracker.update(det, 0.25, ego, prior)
+    pool = tracker.persistent_fingerprint()
+    assert len(pool.distances_m[0]) == 5 and np.all(pool.fresh[0])
+    assert np.min(np.abs(pool.distances_m[0] - up)) < 0.02
+    np.testing.assert_allclose(fp.distances_m[0], np.sort(truth[-1]), atol=0.05)
