@@ -23,6 +23,12 @@ def evaluate(
     scenario: str = typer.Option(
         None, "--scenario", help="Scenario YAML or name (default: sampled goals in the paper room)."
     ),
+    task: str = typer.Option(
+        None,
+        "--task",
+        help="path | goal: override the scenario's task mode (e.g. sampled goals in another "
+        "layout).",
+    ),
     episodes: int = typer.Option(
         20, "--episodes", help="Number of episodes (seeds seed, seed+1, ...)."
     ),
@@ -40,10 +46,15 @@ def evaluate(
         raise InputError(f"--episodes: must be at least 1, got {episodes}")
     if model is not None and agent != "ppo":
         raise InputError("--model: only used with --agent ppo")
+    if task is not None and task not in ("path", "goal"):
+        raise InputError(f"--task: must be 'path' or 'goal', got {task!r}")
     from agents import evaluate as ev
     from lrp_gym.commands._common import write_json
 
-    env_obj = ev.make_eval_env(agent, env, scenario, render_mode="rgb_array" if gif else None)
+    overrides = {"task": {"mode": task}} if task is not None else None
+    env_obj = ev.make_eval_env(
+        agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=overrides
+    )
     policy = ev.make_agent(agent, env_obj, model, seed)
     env_id = env_obj.spec.id if env_obj.spec is not None else env
 
@@ -65,6 +76,7 @@ def evaluate(
         "agent": agent,
         "env_id": env_id,
         "scenario": scenario,
+        "task": task,
         "model": str(model or ev.DEFAULT_MODEL) if agent == "ppo" else None,
         **ev.public(summary),
     }

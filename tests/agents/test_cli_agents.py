@@ -27,6 +27,7 @@ def run_cli(capsys, *args: str) -> tuple[int, str, str]:
             "--model",
         ),
         (["evaluate", "--env", "NoSuchEnv-v0", "--episodes", "1"], "--env"),
+        (["evaluate", "--task", "maze", "--episodes", "1"], "--task"),
         (["train", "--config", "/nonexistent/ppo.yaml"], "--config"),
         (["demo", "--steps", "0"], "--steps"),
     ],
@@ -83,6 +84,29 @@ def test_evaluate_json_has_the_documented_keys(capsys):
     assert doc["episodes"] == 2 and [r["seed"] for r in doc["per_episode"]] == [7, 8]
     assert 0.0 <= doc["time_localised"] <= 1.0
     assert doc["p95_loc_error_m"] <= doc["max_loc_error_m"]
+
+
+def test_evaluate_task_overrides_the_scenario_mode(capsys, monkeypatch):
+    """--task goal turns a path scenario into sampled-goal episodes in its room and layout."""
+    from agents import evaluate as ev
+
+    made = []
+    original = ev.make_eval_env
+
+    def spy(*args, **kwargs):
+        made.append(original(*args, **kwargs))
+        return made[-1]
+
+    monkeypatch.setattr(ev, "make_eval_env", spy)
+    for task in ("path", "goal"):
+        args = ["evaluate", "--agent", "random", "--env", "LRPRadarNavFast-v0"]
+        args += ["--scenario", "ipin2023-2types", "--task", task, "--episodes", "1", "--json"]
+        code, out, _ = run_cli(capsys, *args)
+        assert code == 0 and json.loads(out)["task"] == task
+    path_env, goal_env = (e.unwrapped for e in made)
+    assert path_env.cfg.task.mode == "path" and goal_env.cfg.task.mode == "goal"
+    assert goal_env.cfg.reflectors == path_env.cfg.reflectors  # same layout (2 types)
+    assert len(goal_env.world.layout.types) == 2
 
 
 def test_demo_writes_plot_and_consistent_summary(capsys, tmp_path):
