@@ -26,6 +26,9 @@ def track(
         "--prior/--no-prior",
         help="Identify the reflectors with AMCL's last estimate moved by the odometry.",
     ),
+    plot: str | None = typer.Option(
+        None, "--plot", help="Save a figure of true, detected and tracked distances (PNG)."
+    ),
     ego: bool = typer.Option(
         True,
         "--ego/--no-ego",
@@ -45,9 +48,20 @@ def track(
     if len(cfg.task.path) < 2:
         raise InputError(f"{scenario}: task.path needs at least two waypoints to drive")
     run = run_path(cfg, seed, use_ego=ego, use_prior=prior)
+    if plot:
+        from lrp_gym.commands._common import save_figure
+        from lrp_gym.tracking.plotting import plot_track_run
+        from lrp_gym.world.world import World
+
+        layout = World.from_config(cfg).layout
+        s = run.summary
+        title = f"tracked RMSE {s['tracked_rmse_m']:.3f} m, raw {s['raw_rmse_m']:.3f} m"
+        save_figure(plot_track_run(run, layout.type_names, layout.type_index, title), plot)
     if json_out:
         print_json(run.summary)
         return
+    if plot:
+        console.print(f"saved {plot}")
     names = cfg.reflectors.layout
     table = Table(title=f"{cfg.name}: true / raw / tracked distance [m] per reflector")
     table.add_column("frame", justify="right")

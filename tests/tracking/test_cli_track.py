@@ -45,3 +45,11 @@ def test_map_aided_identification_on_the_real_chain():
     run = run_path(cfg, 0)
     late = np.abs(run.tracked_m[8:] - run.truth_m[8:])
     assert np.nanmedian(late) < 0.03
+
+
+def test_track_plot_is_written_whole(tmp_path):
+    out = tmp_path / "figs" / "track.png"
+    result = CliRunner().invoke(app, ["track", "ipin2023", "--plot", str(out)])
+    assert result.exit_code == 0, result.output
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not list(out.parent.glob("*.tmp*"))  # written atomically
