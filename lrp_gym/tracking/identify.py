@@ -55,9 +55,10 @@ class ReflectorIdentifier:
     def score(self, t: Track) -> float:
         """How much a track looks like one of its type's reflectors (higher: more).
 
-        Hit rate, age, misses, RCS fit, and how well it follows the motion model: a room
-        return that moves with the robot (ceiling, a wall's specular point) keeps a running
-        normalised innovation well above the 2 of a static reflector.
+        Hit rate, age, misses, RCS fit, and (weighted by ``nis_weight``, off by default) how
+        well it follows the motion model: a room return that moves with the robot (ceiling, a
+        wall's specular point) keeps a running normalised innovation above the 2 of a static
+        reflector.
         """
         hit_rate = bin(t.hits).count("1") / self.cfg.confirm_window
         misfit = (
@@ -146,9 +147,8 @@ class ReflectorIdentifier:
         """Mark, per type, the persistent tracks most like its reflectors as reported."""
         for ty, cap in enumerate(self.capacity):
             pool = [t for t in tracks if t.type_index == ty and t.confirmed]
-            chosen = dict(
-                (id(t), slot) for t, slot in self._match_slots(pool, ty, prior, np.arange(cap))
-            )
+            pairs = self._match_slots(pool, ty, prior, np.arange(cap))
+            chosen = {id(t): slot for t, slot in pairs}
             for t in pool:
                 t.selected = id(t) in chosen
                 t.slot = chosen.get(id(t), -1)

@@ -249,10 +249,9 @@ class LrpTracker:
         Without ``detections``: those of the last :meth:`update`.
         """
         if detections is None:
-            detections, cand = self._gated
+            detections, cand = self._gated  # the window test of the last update, reused
         else:
             cand = self.classifier.candidates(detections)
-        # The frame's window test is reused: this runs on every env step.
         best = self.classifier.classify(detections, cand)
         var = self.cfg.measurement_std_m**2
         dists = tuple(np.sort(detections.range_m[best == t]) for t in range(len(self.type_names)))
