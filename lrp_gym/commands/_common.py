@@ -14,6 +14,43 @@ from rich.console import Console
 console = Console()
 
 ScenarioArg = "Scenario YAML file, or the name of one in configs/scenarios (e.g. ipin2023)."
+SetHelp = (
+    "Override a scenario setting, KEY.PATH=VALUE (the value is read as YAML), e.g. "
+    "localization.measurements=tracks; repeatable."
+)
+
+
+def parse_sets(values: list[str] | None, scenario: str | None = None) -> dict[str, Any]:
+    """``--set`` options as one nested override dict, checked against the scenario.
+
+    Raises
+    ------
+    InputError
+        A malformed item, naming ``--set``.
+    ScenarioError
+        A key the schema does not know or a value it rejects, naming the field.
+    """
+    import yaml
+
+    from lrp_gym.config import deep_merge, load_scenario
+    from lrp_gym.errors import InputError
+
+    out: dict[str, Any] = {}
+    for item in values or []:
+        key, sep, raw = item.partition("=")
+        path = key.strip().split(".")
+        if not sep or not all(p.strip() for p in path):
+            raise InputError(f"--set: expected KEY.PATH=VALUE, got {item!r}")
+        try:
+            value = yaml.safe_load(raw)
+        except yaml.YAMLError as exc:
+            raise InputError(f"--set {key}: the value is not valid YAML ({exc})") from None
+        for part in reversed(path):
+            value = {part.strip(): value}
+        out = deep_merge(out, value)
+    if out:
+        load_scenario(scenario or "ipin2023").with_overrides(out)  # fail before any work
+    return out
 
 
 def to_jsonable(value: Any) -> Any:

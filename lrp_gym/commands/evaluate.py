@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from lrp_gym.commands._common import console, print_json
+from lrp_gym.commands._common import SetHelp, console, parse_sets, print_json
 from lrp_gym.errors import InputError
 
 AGENT_NAMES = ("pure-pursuit", "ppo", "random", "oracle")
@@ -36,6 +36,7 @@ def evaluate(
     json_out: bool = typer.Option(False, "--json", help="Print the metrics as JSON only."),
     gif: Path = typer.Option(None, "--gif", help="Write the first episode as an animated GIF."),
     out: Path = typer.Option(None, "--out", help="Also write the metrics JSON to this file."),
+    sets: list[str] = typer.Option(None, "--set", help=SetHelp),
 ) -> None:
     """Evaluate an agent: success, collisions, time to goal, localisation and cross-track error."""
     if agent not in AGENT_NAMES:
@@ -50,10 +51,13 @@ def evaluate(
         raise InputError(f"--task: must be 'path' or 'goal', got {task!r}")
     from agents import evaluate as ev
     from lrp_gym.commands._common import write_json
+    from lrp_gym.config import deep_merge
 
-    overrides = {"task": {"mode": task}} if task is not None else None
+    overrides = parse_sets(sets, scenario)
+    if task is not None:
+        overrides = deep_merge(overrides, {"task": {"mode": task}})
     env_obj = ev.make_eval_env(
-        agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=overrides
+        agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=overrides or None
     )
     policy = ev.make_agent(agent, env_obj, model, seed)
     env_id = env_obj.spec.id if env_obj.spec is not None else env

@@ -7,7 +7,14 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from lrp_gym.commands._common import ScenarioArg, console, save_figure, write_json
+from lrp_gym.commands._common import (
+    ScenarioArg,
+    SetHelp,
+    console,
+    parse_sets,
+    save_figure,
+    write_json,
+)
 from lrp_gym.config import load_scenario
 from lrp_gym.errors import InputError
 from lrp_gym.experiments.reproduce import PAPER, Reproduction, reproduce
@@ -62,6 +69,7 @@ def reproduce_paper(
         None, "--json", help="Write the results to this JSON file."
     ),
     plot_path: str | None = typer.Option(None, "--plot", help="Save the error figure here."),
+    sets: list[str] = typer.Option(None, "--set", help=SetHelp),
 ) -> None:
     """Run the full chain (radar, CFAR, tracking, look-up table, AMCL) along the scenario's path
     and compare the per-position errors with the paper's."""
@@ -75,7 +83,7 @@ def reproduce_paper(
         raise InputError(f"--estimator: expected cluster or best_k, got {estimator!r}")
     if particles is not None and particles < 10:
         raise InputError(f"--particles: must be at least 10, got {particles}")
-    cfg = load_scenario(scenario)
+    cfg = load_scenario(scenario).with_overrides(parse_sets(sets, scenario))
     over: dict = {"radar": {"noise": noise == "on"}}
     if particles is not None:
         over["localization"] = {

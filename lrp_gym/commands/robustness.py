@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from lrp_gym.commands._common import console, print_json, save_figure
+from lrp_gym.commands._common import SetHelp, console, parse_sets, print_json, save_figure
 from lrp_gym.errors import InputError
 
 
@@ -42,6 +42,7 @@ def robustness(
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the first episode of every cell."),
     json_out: bool = typer.Option(False, "--json", help="Print the matrix as JSON only."),
+    sets: list[str] = typer.Option(None, "--set", help=SetHelp),
     plot: Path = typer.Option(
         None, "--plot", help="Write heatmaps (success, p95 error) to this image."
     ),
@@ -64,6 +65,7 @@ def robustness(
         raise InputError(f"--plot: use a .png, .pdf, .svg or .jpg file name, got {plot}")
     if seed < 0:
         raise InputError(f"--seed: must be non-negative, got {seed}")
+    overrides = parse_sets(sets, "ipin2023" if task == "path" else None)
 
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -87,6 +89,7 @@ def robustness(
             seed,
             task,
             model=model,
+            overrides=overrides,
             progress=lambda label: bar.update(job, description=f"{label:<26}"),
             on_episode=lambda: bar.advance(job),
         )

@@ -6,7 +6,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from lrp_gym.commands._common import ScenarioArg, console, print_json
+from lrp_gym.commands._common import ScenarioArg, SetHelp, console, parse_sets, print_json
 from lrp_gym.config import load_scenario
 from lrp_gym.errors import InputError
 
@@ -21,6 +21,7 @@ def track(
     scenario: str = typer.Argument(..., help=ScenarioArg),
     seed: int = typer.Option(0, "--seed", help="Seed of the radar noise."),
     json_out: bool = typer.Option(False, "--json", help="Print only the summary as JSON."),
+    sets: list[str] = typer.Option(None, "--set", help=SetHelp),
     prior: bool = typer.Option(
         True,
         "--prior/--no-prior",
@@ -44,7 +45,7 @@ def track(
     """
     from lrp_gym.tracking.evaluate import run_path
 
-    cfg = load_scenario(scenario)
+    cfg = load_scenario(scenario).with_overrides(parse_sets(sets, scenario))
     if len(cfg.task.path) < 2:
         raise InputError(f"{scenario}: task.path needs at least two waypoints to drive")
     run = run_path(cfg, seed, use_ego=ego, use_prior=prior)

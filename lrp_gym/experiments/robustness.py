@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from lrp_gym.config import PerturbationsConfig
+from lrp_gym.config import PerturbationsConfig, deep_merge
 from lrp_gym.errors import InputError
 
 LOCALISED_M = 0.2
@@ -121,6 +121,7 @@ def run_matrix(
     seed: int = 0,
     task: str = "path",
     model: str | None = None,
+    overrides: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
     on_episode: Callable[[], None] | None = None,
 ) -> dict[str, Any]:
@@ -134,6 +135,8 @@ def run_matrix(
         ``LRPRadarNavFast-v0`` (default) or ``LRPRadarNav-v0`` (signal-level radar).
     task : {"path", "goal"}
         ``path``: the paper scenario ``ipin2023``; ``goal``: sampled start/goal pairs.
+    overrides : dict, optional
+        Scenario settings applied to every cell (before the cell's perturbation).
     progress : callable, optional
         Called with a label before each cell.
     on_episode : callable, optional
@@ -156,7 +159,8 @@ def run_matrix(
     for name, sev in cells_spec:
         if progress is not None:
             progress(f"{name} @ {sev:g}" if name != BASELINE else "baseline")
-        env = make_eval_env(agent, env_id, scenario, overrides=cell_overrides(name, sev) or None)
+        cell = deep_merge(overrides or {}, cell_overrides(name, sev))
+        env = make_eval_env(agent, env_id, scenario, overrides=cell or None)
         try:
             if policy is None:
                 policy = make_agent(agent, env, model, seed)
