@@ -261,8 +261,7 @@ class LRPRadarNavEnv(gym.Env):
                 self.pose, velocity_xy, rng, hidden=hidden, extra_scatterers=extra
             )
             self.detections = pert.filter_detections(ctx, det, rng)
-        heading = np.array([np.cos(self.pose[2]), np.sin(self.pose[2])])
-        ego = EgoMotion(float(velocity_xy @ heading), odometry)
+        ego = EgoMotion.from_velocity(velocity_xy, self.pose[2], odometry)
         self.fingerprint, est = track_and_localize(
             self.world,
             self.tracker,

@@ -161,14 +161,13 @@ def reproduce(
                 dets = sensor.measure(pose, vel, rng)
                 t1 = time.perf_counter()
                 odo = _odometry(world, prev, pose, i, rng)
-                speed = float(vel @ np.array([np.cos(pose[2]), np.sin(pose[2])]))
                 fp, est = track_and_localize(
                     world,
                     tracker,
                     amcl,
                     dets,
                     cfg.task.frame_period_s,
-                    EgoMotion(speed, odo),
+                    EgoMotion.from_velocity(vel, pose[2], odo),
                     est,
                     rng,
                     measurements=loc.measurements,

@@ -171,7 +171,7 @@ class Amcl:
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
             if recovery:
-                self._update_recovery(w, fingerprint)
+                self._update_recovery(self.particles, w, fingerprint)
             loglik = self.model.log_likelihood(self.particles, fingerprint)
             shift = float(np.max(np.where(w > 0.0, loglik, -np.inf)))
             if not np.isfinite(shift):
@@ -198,15 +198,11 @@ class Amcl:
         """Score the last update's predicted cloud on ``fingerprint`` (see ``recovery``)."""
         if self._predicted is None or fingerprint.count == 0:
             return
-        particles, weights = self._predicted
-        current = self.particles
-        self.particles = particles  # _update_recovery scores self.particles
-        try:
-            self._update_recovery(weights, fingerprint)
-        finally:
-            self.particles = current
+        self._update_recovery(*self._predicted, fingerprint)
 
-    def _update_recovery(self, prior_weights: np.ndarray, fingerprint: Fingerprint) -> None:
+    def _update_recovery(
+        self, particles: np.ndarray, prior_weights: np.ndarray, fingerprint: Fingerprint
+    ) -> None:
         """Augmented MCL's short- and long-term averages of the measurement fit.
 
         The averaged quantity is :meth:`FingerprintModel.distance_fit` of the predicted
@@ -219,7 +215,7 @@ class Amcl:
         cfg = self.cfg
         stride = max(1, len(prior_weights) // _FIT_SAMPLE)
         fits = self.model.distance_fits(
-            self.particles[::stride, :2], prior_weights[::stride], fingerprint
+            particles[::stride, :2], prior_weights[::stride], fingerprint
         )
         if len(fits) == 0:
             return

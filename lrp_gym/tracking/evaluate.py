@@ -68,13 +68,11 @@ def ego_motions(trajectory: Trajectory, world: World, rng: np.random.Generator) 
     The speed is the true signed forward speed; the odometry since the previous frame is the
     true ``(rot1, trans, rot2)`` plus ``world.odometry_noise`` (zero in the first frame).
     """
-    poses = trajectory.poses
-    heading = np.column_stack([np.cos(poses[:, 2]), np.sin(poses[:, 2])])
-    speed = np.einsum("kj,kj->k", trajectory.velocities_xy_mps, heading)
-    out = [EgoMotion(float(speed[0]), np.zeros(3))]
+    poses, vel = trajectory.poses, trajectory.velocities_xy_mps
+    out = [EgoMotion.from_velocity(vel[0], poses[0, 2], np.zeros(3))]
     for k in range(1, len(trajectory)):
         odo = world.odometry_noise.sample(odometry_delta(poses[k - 1], poses[k]), (), rng)
-        out.append(EgoMotion(float(speed[k]), odo))
+        out.append(EgoMotion.from_velocity(vel[k], poses[k, 2], odo))
     return out
 
 

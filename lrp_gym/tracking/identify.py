@@ -17,7 +17,7 @@ from lrp_gym.config import TrackingConfig
 from lrp_gym.tracking.classify import LrpClassifier
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.prior import DistancePrior
-from lrp_gym.tracking.track import NIS_EXPECTED, Track
+from lrp_gym.tracking.track import NIS_EXPECTED, Track, tracks_fingerprint
 
 INFEASIBLE = 1e9  # finite "forbidden" cost: linear_sum_assignment rejects all-inf rows
 POOL_FACTOR = 3  # persistent returns kept per type, in units of the type's reflector count
@@ -150,12 +150,11 @@ class ReflectorIdentifier:
             pairs = self._match_slots(pool, ty, prior, np.arange(cap))
             chosen = {id(t): slot for t, slot in pairs}
             for t in pool:
-                t.selected = id(t) in chosen
                 t.slot = chosen.get(id(t), -1)
 
     def fingerprint(self, tracks: list[Track], prior: DistancePrior | None) -> Fingerprint:
         """The reported tracks' distances per type; free slots filled by tentative tracks."""
-        dists, variances, fresh = [], [], []
+        chosen_by_type, fresh_by_type = [], []
         for ty, cap in enumerate(self.capacity):
             sel = [t for t in tracks if t.type_index == ty and t.selected]
             chosen, flags = sel, [t.fresh for t in sel]
@@ -170,11 +169,6 @@ class ReflectorIdentifier:
                 extra = [t for t, _ in self._match_slots(tent, ty, prior, free)]
                 chosen = sel + extra
                 flags = flags + [False] * len(extra)
-            d = np.array([t.kf.x[0, 0] for t in chosen], dtype=float)
-            v = np.array([t.kf.P[0, 0] for t in chosen], dtype=float)
-            f = np.array(flags, dtype=bool)
-            order = np.argsort(d, kind="stable")
-            dists.append(d[order])
-            variances.append(v[order])
-            fresh.append(f[order])
-        return Fingerprint(self.type_names, tuple(dists), tuple(variances), tuple(fresh))
+            chosen_by_type.append(chosen)
+            fresh_by_type.append(flags)
+        return tracks_fingerprint(self.type_names, chosen_by_type, fresh_by_type)

@@ -57,6 +57,14 @@ class EgoMotion:
         object.__setattr__(self, "odometry", odo)
         object.__setattr__(self, "speed_mps", float(self.speed_mps))
 
+    @classmethod
+    def from_velocity(
+        cls, velocity_xy_mps: np.ndarray, heading_rad: float, odometry: np.ndarray
+    ) -> EgoMotion:
+        """From the floor velocity and heading at the frame: the signed forward speed."""
+        v = np.asarray(velocity_xy_mps, dtype=float)
+        return cls(float(v[0] * np.cos(heading_rad) + v[1] * np.sin(heading_rad)), odometry)
+
 
 def predict_static(
     range_m: np.ndarray,

@@ -2,8 +2,8 @@
 
 The paper lets predictions identify the reflectors among the detections. The positioning
 predicts every reflector's distance: a particle cloud as a mixture (one component per sampled
-particle, so a cloud split between mirror-image poses predicts both), a converged pose estimate
-as one Gaussian per reflector. A persistent return that sits at a predicted distance is far
+particle, so a cloud split between mirror-image poses predicts both), a pose with its
+covariance as one Gaussian per reflector. A persistent return that sits at a predicted distance is far
 more likely a reflector than one that does not (the ceiling, a wall-ceiling edge).
 """
 
@@ -14,7 +14,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from lrp_gym.world.reflectors import ReflectorLayout
-from lrp_gym.world.robot import apply_odometry
 
 #: Spread of a particle's predicted distance: the radar's range error plus the cloud's
 #: granularity (a converged cloud is a few centimetres wide).
@@ -71,41 +70,6 @@ class DistancePrior:
         return cls(dist[None, :], std[None, :], np.ones(1), layout.type_index.copy())
 
     @classmethod
-    def predicted(
-        cls,
-        layout: ReflectorLayout,
-        mount_height_m: float,
-        pose: np.ndarray,
-        covariance: np.ndarray,
-        odometry: np.ndarray,
-        odometry_std: np.ndarray,
-    ) -> DistancePrior:
-        """One hypothesis one frame later: ``pose`` moved by ``odometry``, its spread widened.
-
-        Parameters
-        ----------
-        pose : ndarray, shape (3,)
-            Last estimate (x, y, theta).
-        covariance : ndarray, shape (3, 3)
-            Its covariance.
-        odometry, odometry_std : ndarray, shape (3,)
-            ``(rot1, trans, rot2)`` since then and its standard deviations.
-        """
-        moved = apply_odometry(np.asarray(pose, dtype=float), np.asarray(odometry, dtype=float))
-        # The translation error lies along and across the direction of travel.
-        heading = float(pose[2] + odometry[0])
-        along = np.array([np.cos(heading), np.sin(heading)])
-        across = np.array([-along[1], along[0]])
-        s_along = float(odometry_std[1])
-        s_across = float(abs(odometry[1]) * np.hypot(odometry_std[0], np.sqrt(covariance[2, 2])))
-        cov = (
-            np.asarray(covariance, dtype=float)[:2, :2]
-            + s_along**2 * np.outer(along, along)
-            + s_across**2 * np.outer(across, across)
-        )
-        return cls.from_pose(layout, mount_height_m, moved[:2], cov)
-
-    @classmethod
     def from_particles(
         cls,
         layout: ReflectorLayout,
@@ -158,30 +122,3 @@ class DistancePrior:
         log_terms = -0.5 * (z2 + np.log(2.0 * np.pi * var)) + np.log(self.weight)[None, :, None]
         peak = log_terms.max(axis=1)
         return peak + np.log(np.exp(log_terms - peak[:, None, :]).sum(axis=1))
-
-
-def prior_from_estimate(world, estimate, odometry: np.ndarray) -> DistancePrior | None:
-    """The prior for the next frame: a converged pose estimate moved by the odometry since.
-
-    Parameters
-    ----------
-    world : World
-        Layout, radar height and the odometry noise model.
-    estimate : PoseEstimate or None
-        The positioning's last estimate (anything with ``pose``, ``covariance`` and
-        ``converged``); ``None`` or not converged gives no prior: a multimodal particle
-        cloud's mean predicts nothing useful about which return is which.
-    odometry : ndarray, shape (3,)
-        ``(rot1, trans, rot2)`` since that estimate.
-    """
-    if estimate is None or not estimate.converged:
-        return None
-    odo = np.asarray(odometry, dtype=float)
-    return DistancePrior.predicted(
-        world.layout,
-        world.mount_height_m,
-        estimate.pose,
-        estimate.covariance,
-        odo,
-        world.odometry_noise.std(odo),
-    )

@@ -5,7 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+import numpy as np
 from filterpy.kalman import KalmanFilter
+
+from lrp_gym.tracking.fingerprint import Fingerprint
 
 NIS_EXPECTED = 2.0  # mean of a chi-square with 2 degrees of freedom: a well-modelled track
 
@@ -66,7 +69,6 @@ class Track:
         "age",
         "misses",
         "confirmed",
-        "selected",
         "fresh",
         "nis",
         "slot",
@@ -81,13 +83,31 @@ class Track:
         self.age = 1
         self.misses = 0
         self.confirmed = False  # passed M of N: a persistent return
-        self.selected = False  # reported as one of its type's reflectors
         self.fresh = True
         self.nis = NIS_EXPECTED
-        self.slot = -1  # reflector slot of its type while reported
+        self.slot = -1  # reflector slot of its type while reported, else -1
+
+    @property
+    def selected(self) -> bool:
+        """Reported as one of its type's reflectors."""
+        return self.slot >= 0
 
     @property
     def status(self) -> Literal["tentative", "candidate", "confirmed"]:
         if self.selected:
             return "confirmed"
         return "candidate" if self.confirmed else "tentative"
+
+
+def tracks_fingerprint(
+    type_names: tuple[str, ...], tracks_by_type: list[list[Track]], fresh_by_type: list[list[bool]]
+) -> Fingerprint:
+    """The fingerprint of given tracks per type: filtered distances, variances, fresh flags."""
+    dists, variances, fresh = [], [], []
+    for tracks, flags in zip(tracks_by_type, fresh_by_type, strict=True):
+        d = np.array([t.kf.x[0, 0] for t in tracks], dtype=float)
+        order = np.argsort(d, kind="stable")
+        dists.append(d[order])
+        variances.append(np.array([t.kf.P[0, 0] for t in tracks], dtype=float)[order])
+        fresh.append(np.array(flags, dtype=bool)[order])
+    return Fingerprint(type_names, tuple(dists), tuple(variances), tuple(fresh))

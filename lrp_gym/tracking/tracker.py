@@ -53,7 +53,7 @@ from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.identify import INFEASIBLE, POOL_FACTOR, ReflectorIdentifier
 from lrp_gym.tracking.motion import EgoMotion, predict_static
 from lrp_gym.tracking.prior import DistancePrior
-from lrp_gym.tracking.track import Track, TrackView
+from lrp_gym.tracking.track import Track, TrackView, tracks_fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.world import World
 
@@ -189,8 +189,10 @@ class LrpTracker:
             t.fresh = False
         self._speed_mps = None if ego is None else ego.speed_mps
 
-        window = self.classifier.candidates(detections)
-        self._gated = (detections, window)
+        last, window = self._gated
+        if last is not detections:  # gated_fingerprint(detections) already ran the window test
+            window = self.classifier.candidates(detections)
+            self._gated = (detections, window)
         cand = window if ego is None else window & self._doppler_ok(detections, ego.speed_mps)
         z = np.column_stack([detections.range_m, detections.velocity_mps])
         free = np.ones(len(detections), dtype=bool)
@@ -224,22 +226,17 @@ class LrpTracker:
         ``max_misses`` leaves out tracks that have coasted for more frames in a row: a
         coasting track follows the odometry, as a wrong pose hypothesis does.
         """
-        dists, variances, fresh = [], [], []
-        for ty in range(len(self.type_names)):
-            tracks = sorted(
-                (
-                    t
-                    for t in self._tracks
-                    if t.type_index == ty
-                    and t.confirmed
-                    and (max_misses is None or t.misses <= max_misses)
-                ),
-                key=lambda t: t.kf.x[0, 0],
-            )
-            dists.append(np.array([t.kf.x[0, 0] for t in tracks], dtype=float))
-            variances.append(np.array([t.kf.P[0, 0] for t in tracks], dtype=float))
-            fresh.append(np.array([t.fresh for t in tracks], dtype=bool))
-        return Fingerprint(self.type_names, tuple(dists), tuple(variances), tuple(fresh))
+        by_type = [
+            [
+                t
+                for t in self._tracks
+                if t.type_index == ty
+                and t.confirmed
+                and (max_misses is None or t.misses <= max_misses)
+            ]
+            for ty in range(len(self.type_names))
+        ]
+        return tracks_fingerprint(self.type_names, by_type, [[t.fresh for t in g] for g in by_type])
 
     def gated_fingerprint(self, detections: Detections | None = None) -> Fingerprint:
         """Detections that pass a type's RCS and range window, unsmoothed.
@@ -252,6 +249,7 @@ class LrpTracker:
             detections, cand = self._gated  # the window test of the last update, reused
         else:
             cand = self.classifier.candidates(detections)
+            self._gated = (detections, cand)  # update() of the same frame reuses it
         best = self.classifier.classify(detections, cand)
         var = self.cfg.measurement_std_m**2
         dists = tuple(np.sort(detections.range_m[best == t]) for t in range(len(self.type_names)))

@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.tracking.motion import EgoMotion, predict_static
-from lrp_gym.tracking.prior import DistancePrior, prior_from_estimate
+from lrp_gym.tracking.prior import DistancePrior
 from lrp_gym.world.robot import apply_odometry
 
 
@@ -85,21 +84,6 @@ def test_prior_spread_matches_monte_carlo(paper_world):
     samples = rng.multivariate_normal(xy, cov, 20000)
     d = paper_world.true_distances_m(samples)
     np.testing.assert_allclose(prior.std_m[0], d.std(axis=0), rtol=0.05)
-
-
-def test_prior_only_from_a_converged_estimate(paper_world):
-    est = PoseEstimate(np.array([1.0, 1.0, 0.0]), np.eye(3) * 1e-3, converged=False)
-    assert prior_from_estimate(paper_world, est, np.zeros(3)) is None
-    assert prior_from_estimate(paper_world, None, np.zeros(3)) is None
-    est = PoseEstimate(np.array([1.0, 1.0, 0.0]), np.eye(3) * 1e-3, converged=True)
-    prior = prior_from_estimate(paper_world, est, np.array([0.0, 0.5, 0.0]))
-    # Moved half a metre along the heading (+x), and less certain than before.
-    moved = paper_world.true_distances_m(np.array([[1.5, 1.0]]))[0]
-    np.testing.assert_allclose(prior.distance_m[0], moved)
-    still = DistancePrior.from_pose(
-        paper_world.layout, paper_world.mount_height_m, np.array([1.5, 1.0]), est.covariance[:2, :2]
-    )
-    assert np.all(prior.std_m > still.std_m)
 
 
 def test_particle_prior_keeps_both_modes(paper_world):
