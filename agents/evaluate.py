@@ -18,13 +18,13 @@ import gymnasium as gym
 import numpy as np
 
 from lrp_gym.errors import InputError
+from lrp_gym.localization.metrics import LOCALISED_M, trust_metrics
 
 AGENTS = ("pure-pursuit", "ppo", "random", "oracle")
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 DEFAULT_MODEL = MODELS_DIR / "ppo_lrp_nav.zip"
 DEFAULT_ENV = "LRPRadarNav-v0"
 ORACLE_ENV = "LRPRadarNavOracle-v0"
-LOCALISED_M = 0.2  # an estimate within this distance of the truth counts as "localised"
 
 
 class Policy(Protocol):
@@ -203,6 +203,7 @@ class EpisodeResult:
     true_xy: np.ndarray = field(repr=False)
     est_xy: np.ndarray = field(repr=False)
     waypoints_m: np.ndarray = field(repr=False)
+    confidence: np.ndarray | None = field(default=None, repr=False)
 
     def row(self) -> dict[str, Any]:
         """Scalar summary of the episode (JSON-friendly)."""
@@ -230,7 +231,7 @@ def run_episode(
     waypoints = np.asarray(base.path.waypoints_m, dtype=float)
     true_xy = [np.asarray(info["true_pose"][:2], dtype=float)]
     est_xy = [np.asarray(info["est_pose"][:2], dtype=float)]
-    errors, conv = [], []
+    errors, conv, confidence = [], [], []
     ret, collision, success, steps = 0.0, False, False, 0
     if frames is not None:
         frames.append(env.render())
@@ -248,6 +249,7 @@ def run_episode(
         est_xy.append(np.asarray(info["est_pose"][:2], dtype=float))
         errors.append(info["position_error_m"])
         conv.append(info["converged"])
+        confidence.append(info.get("localization_confidence", float(info["converged"])))
         collision |= bool(info["collision"])
         success |= bool(info["is_success"])
         if frames is not None:
@@ -263,6 +265,7 @@ def run_episode(
         time_to_goal_s=steps * dt if success else None,
         loc_error_m=np.asarray(errors, dtype=float),
         converged=np.asarray(conv, dtype=bool),
+        confidence=np.asarray(confidence, dtype=float),
         cross_track_m=cross_track_m(txy[1:], waypoints),
         true_xy=txy,
         est_xy=np.asarray(est_xy),
@@ -292,9 +295,13 @@ def summarize(results: list[EpisodeResult]) -> dict[str, Any]:
         "p95_loc_error_m": stat(lambda a: np.percentile(a, 95), err),
         "max_loc_error_m": stat(np.max, err),
         "mean_loc_error_converged_m": stat(np.mean, err[conv]),
-        "time_localised": stat(lambda a: np.mean(a < LOCALISED_M), err),
         "mean_cross_track_m": stat(np.mean, xt),
         "max_cross_track_m": stat(np.max, xt),
+        **trust_metrics(
+            [r.loc_error_m for r in results],
+            [r.converged for r in results],
+            [r.converged if r.confidence is None else r.confidence for r in results],
+        ),
     }
 
 
@@ -389,6 +396,11 @@ def summary_table(summary: dict[str, Any], title: str = "evaluation"):
         ("  max", fmt(summary["max_loc_error_m"], " m")),
         ("  mean once converged", fmt(summary["mean_loc_error_converged_m"], " m")),
         (f"time localised (< {LOCALISED_M:g} m)", fmt(summary["time_localised"], pct=True)),
+        ("  median frames to first localised", fmt(summary["median_frames_to_localised"])),
+        (
+            "  confidently wrong (converged, > 0.3 m)",
+            fmt(summary["confidently_wrong_rate"], pct=True),
+        ),
         ("mean cross-track error", fmt(summary["mean_cross_track_m"], " m")),
         ("max cross-track error", fmt(summary["max_cross_track_m"], " m")),
     ]

@@ -394,6 +394,36 @@ class LocalizationConfig(Strict):
     )
     clutter_probability: Fraction = 0.2
     structure_probability: Fraction = 0.6
+    doppler_std_mps: NonNegFloat = Field(
+        default=0.15,
+        description="std of a return's measured radial velocity in AMCL's likelihood (heading "
+        "evidence while moving); 0 weighs the distances only",
+    )
+    doppler_outlier_probability: Fraction = 0.1
+    detection_probability: Fraction = Field(
+        default=0.0,
+        description="probability that a reflector yields a detection; > 0 penalises poses "
+        "whose reflectors no measured distance matches (negative information)",
+    )
+    global_proposal: bool = Field(
+        default=True,
+        description="draw the global start and recovery particles from a map-wide grid of the "
+        "frame likelihood, and test whether the cloud has lost the robot",
+    )
+    global_grid_m: PositiveFloat = 0.1
+    likelihood_exponent: Annotated[float, Field(gt=0.0, le=1.0)] = Field(
+        default=0.5,
+        description="power of each frame's likelihood (< 1 tempers it: frames' errors are "
+        "correlated, so their product would overcount the evidence)",
+    )
+    mode_min_particles: Annotated[int, Field(ge=0)] = Field(
+        default=100,
+        description="particles every posterior mode keeps through resampling (weighted by its "
+        "mass), so that a minority mode survives until the evidence decides; 0: plain resampling",
+    )
+    lost_drift_nats: NonNegFloat = 4.0
+    lost_threshold_nats: PositiveFloat = 8.0
+    lost_restart_nats: PositiveFloat = 20.0
     resample_ess_ratio: Fraction = 0.5
     alpha_slow: Fraction = 0.02
     alpha_fast: Fraction = 0.3

@@ -278,7 +278,9 @@ class LRPRadarNavEnv(gym.Env):
             lut_est = self.lut.query(self.fingerprint)
             # The table knows no heading: keep AMCL's.
             pose = np.array([lut_est.pose[0], lut_est.pose[1], est.pose[2]])
-            est = PoseEstimate(pose, lut_est.covariance, 0, 0.0, lut_est.converged)
+            est = PoseEstimate(
+                pose, lut_est.covariance, 0, 0.0, lut_est.converged, float(lut_est.converged), 1
+            )
         self.estimate = est
 
     def _frame_context(self) -> FrameContext:
@@ -315,6 +317,8 @@ class LRPRadarNavEnv(gym.Env):
             "ess": float(est.ess),
             "n_detections": len(self.detections),
             "converged": bool(est.converged),
+            "localization_confidence": float(est.confidence),
+            "n_modes": int(est.n_modes),
             "progress_m": self._s_true,
             "path_length_m": self.path.length_m,
             "collision": collided,

@@ -26,6 +26,8 @@ relocalisation rather than a crash.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from lrp_gym.config import LocalizationConfig
@@ -33,19 +35,31 @@ from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.localization.estimators import (
     best_k_mean,
     circular_mean,
-    dominant_cluster,
+    cluster_labels,
+    clusters,
     pose_covariance,
 )
 from lrp_gym.localization.kld import KldBinner, kld_particle_count
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.motion import sample_motion
-from lrp_gym.localization.resampling import effective_sample_size, systematic_resample
+from lrp_gym.localization.proposal import LostTest, MeasurementGrid
+from lrp_gym.localization.resampling import (
+    effective_sample_size,
+    mode_preserving_resample,
+    systematic_resample,
+)
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.robot import OdometryNoise
 from lrp_gym.world.world import World
 
 #: Particles on which the recovery's measurement fit is evaluated (a strided subsample).
 _FIT_SAMPLE = 256
+#: Below this speed the Doppler of static returns carries no heading information.
+_MIN_DOPPLER_SPEED_MPS = 0.05
+#: A mode must hold this share of the posterior to count in ``PoseEstimate.n_modes``.
+_MODE_MASS = 0.05
+#: Bins lighter than this share of the weight belong to no mode when resampling.
+_MODE_BIN_MASS = 1e-5
 
 
 class Amcl:
@@ -77,6 +91,10 @@ class Amcl:
             world.fmcw.max_range_m,
             room=world.room,
             structure_probability=cfg.structure_probability,
+            doppler_std_mps=cfg.doppler_std_mps,
+            doppler_outlier_probability=cfg.doppler_outlier_probability,
+            max_velocity_mps=world.fmcw.max_velocity_mps,
+            detection_probability=cfg.detection_probability,
         )
         mn = cfg.motion_noise
         self.motion_noise = OdometryNoise(
@@ -86,6 +104,15 @@ class Amcl:
         self._size_xy = np.asarray(world.room.size_m[:2], dtype=float)
         self._simple_room = not world.room.obstacles
         self.binner = KldBinner(self._size_xy, cfg.kld_bin_m, np.deg2rad(cfg.kld_bin_deg))
+        # Map-wide likelihood grids: a fine one for the global start, a coarse one per frame
+        # for the lost test and recovery proposals (see lrp_gym.localization.proposal).
+        self.global_proposal = cfg.global_proposal
+        if self.global_proposal:
+            self.grid = MeasurementGrid(self._size_xy, cfg.global_grid_m, self._free)
+            self.start_grid = MeasurementGrid(self._size_xy, cfg.global_grid_m / 2.0, self._free)
+        self.lost = LostTest(cfg.lost_drift_nats, cfg.lost_threshold_nats)
+        self._grid_loglik: np.ndarray | None = None
+        self._pending_global = False
         self.particles = np.zeros((0, 3))
         self.weights = np.zeros(0)
         self.w_slow = 0.0
@@ -146,6 +173,12 @@ class Amcl:
         self.n_injected = 0
         self._n_fits = 0  # fits averaged since reset: the first one sets both averages
         self._predicted = None
+        self.lost.reset()
+        self._grid_loglik = None
+        # A uniform prior is drawn from the first frame's likelihood (sensor-based start).
+        self._pending_global = bool(
+            self.global_proposal and self.cfg.init == "uniform" and pose is None
+        )
 
     # ------------------------------------------------------------------ update
     def update(
@@ -155,9 +188,14 @@ class Amcl:
         rng: np.random.Generator,
         *,
         recovery: bool = True,
+        speed_mps: float | None = None,
     ) -> PoseEstimate:
         """Predict with ``odometry`` (rot1, trans, rot2), weight with ``fingerprint`` (None =
         predict only), estimate, and resample if the effective sample size is low.
+
+        ``speed_mps``, the robot's signed forward speed at this frame (wheel odometry), gives
+        every particle a velocity along its heading, so that the fingerprint's Doppler weighs
+        the heading (see :mod:`~lrp_gym.localization.likelihood`); None leaves it out.
 
         With ``recovery=False`` the fit statistic of augmented MCL is not taken from
         ``fingerprint``; the caller passes another one to :meth:`update_recovery` (scored on
@@ -170,13 +208,16 @@ class Amcl:
         w = self.weights * self._free(self.particles)
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
-            if recovery:
-                self._update_recovery(self.particles, w, fingerprint)
-            loglik = self.model.log_likelihood(self.particles, fingerprint)
-            shift = float(np.max(np.where(w > 0.0, loglik, -np.inf)))
-            if not np.isfinite(shift):
-                shift = 0.0
-            w = w * np.exp(loglik - shift)
+            if self.global_proposal:
+                self._grid_loglik = self.grid.log_likelihood(self.model, fingerprint)
+                if not self._pending_global:
+                    self._test_lost(fingerprint, w)
+            if self._pending_global:
+                w = self._global_start(fingerprint, rng, speed_mps)
+            else:
+                if recovery:
+                    self._update_recovery(self.particles, w, fingerprint)
+                w = w * self._likelihood(fingerprint, w, speed_mps)
         total = float(np.sum(w))
         if not (total > 0.0 and np.isfinite(total)):
             self.particles = self.uniform_particles(len(self.particles), rng)
@@ -187,12 +228,64 @@ class Amcl:
         estimate = self._estimate(ess)
         n = len(self.weights)
         self.n_injected = 0
+        # The lost test asks for recovery particles too, once past its threshold.
+        p_lost_excess = max(0.0, 2.0 * self.lost.p_lost - 1.0)
+        self.p_random = max(self.p_random, cfg.max_random_fraction * p_lost_excess)
         # Recovery needs a resampling step to inject: force one when it would add a particle.
         if ess < cfg.resample_ess_ratio * n or self.p_random * n >= 1.0:
             self._resample(rng)
-        return PoseEstimate(
-            estimate.pose, estimate.covariance, len(self.particles), ess, estimate.converged
+        return replace(estimate, n_particles=len(self.particles))
+
+    def _likelihood(
+        self, fingerprint: Fingerprint, weights: np.ndarray, speed_mps: float | None
+    ) -> np.ndarray:
+        """Measurement likelihood (N,) of the particles, scaled so the best live one is 1."""
+        loglik = self.model.log_likelihood(
+            self.particles, fingerprint, velocity_xy=self._velocities(speed_mps)
         )
+        # Tempering: the frames' errors are correlated (multipath persists while the robot
+        # moves a few cm), so a product over frames would count the same evidence repeatedly.
+        loglik *= self.cfg.likelihood_exponent
+        shift = float(np.max(np.where(weights > 0.0, loglik, -np.inf)))
+        if not np.isfinite(shift):
+            shift = 0.0
+        return np.exp(loglik - shift)
+
+    def _global_start(
+        self, fingerprint: Fingerprint, rng: np.random.Generator, speed_mps: float | None
+    ) -> np.ndarray:
+        """Replace the particles by a draw from the uniform prior times this frame's
+        likelihood: positions from the fine grid, headings uniform; returns their importance
+        weights ``L(x) / L(cell)`` (the Doppler term, if any, weighs the headings)."""
+        self._pending_global = False
+        self.lost.reset()
+        n = len(self.particles)
+        cell_ll = self.start_grid.log_likelihood(self.model, fingerprint)
+        xy, cells = self.start_grid.draw(cell_ll * self.cfg.likelihood_exponent, n, rng)
+        self.particles = np.column_stack([xy, rng.uniform(-np.pi, np.pi, n)])
+        loglik = self.model.log_likelihood(
+            self.particles, fingerprint, velocity_xy=self._velocities(speed_mps)
+        )
+        log_w = (loglik - cell_ll[cells]) * self.cfg.likelihood_exponent
+        return np.exp(log_w - np.max(log_w))
+
+    def _test_lost(self, fingerprint: Fingerprint, prior_weights: np.ndarray) -> None:
+        """Feed the lost test with this frame (heading-free, on a subsample of the predicted
+        cloud); a statistic far past the threshold restarts global localisation."""
+        stride = max(1, len(prior_weights) // _FIT_SAMPLE)
+        sub = self.particles[::stride, :2]
+        cloud_ll = self.model.log_likelihood(sub, fingerprint)
+        self.lost.update(float(np.max(self._grid_loglik)), cloud_ll, prior_weights[::stride])
+        if self.lost.statistic_nats >= self.cfg.lost_restart_nats:
+            self._pending_global = True
+
+    def _velocities(self, speed_mps: float | None) -> np.ndarray | None:
+        """Each particle's velocity (N, 2) at ``speed_mps`` along its heading; None when the
+        speed is unknown or too small for the Doppler to say anything about the heading."""
+        if speed_mps is None or abs(speed_mps) < _MIN_DOPPLER_SPEED_MPS:
+            return None
+        th = self.particles[:, 2].astype(np.float32)
+        return speed_mps * np.column_stack([np.cos(th), np.sin(th)])
 
     def update_recovery(self, fingerprint: Fingerprint) -> None:
         """Score the last update's predicted cloud on ``fingerprint`` (see ``recovery``)."""
@@ -238,7 +331,8 @@ class Amcl:
 
     def _estimate(self, ess: float) -> PoseEstimate:
         cfg = self.cfg
-        sel, mass = dominant_cluster(self.particles, self.weights, cfg.kld_bin_m, self._size_xy)
+        sel, masses = clusters(self.particles, self.weights, cfg.kld_bin_m, self._size_xy)
+        mass = float(masses[0]) if len(masses) else 0.0
         sub = self.particles[sel]
         w_sel = self.weights[sel]
         total = float(np.sum(w_sel))
@@ -255,8 +349,22 @@ class Amcl:
         # The spread of the whole set about the estimate would count the few particles that
         # the motion noise scatters away from the mode, and flicker while the error is ~1 cm.
         spread_m2 = max(float(w_n @ (sub[:, 0] ** 2 + sub[:, 1] ** 2) - mean_xy @ mean_xy), 0.0)
-        converged = bool(mass >= cfg.converged_mass and np.sqrt(spread_m2) < cfg.converged_std_m)
-        return PoseEstimate(pose, cov, len(self.particles), ess, converged)
+        confidence = mass * (1.0 - self.lost.p_lost)
+        converged = bool(
+            confidence >= cfg.converged_mass and np.sqrt(spread_m2) < cfg.converged_std_m
+        )
+        n_modes = int(np.count_nonzero(masses >= _MODE_MASS))
+        return PoseEstimate(
+            pose, cov, len(self.particles), ess, converged, float(confidence), n_modes
+        )
+
+    def _injected(self, n: int, rng: np.random.Generator) -> np.ndarray:
+        """Recovery particles: drawn from the last frame's likelihood grid (sensor resetting)
+        when there is one, else uniform; headings uniform."""
+        if self._grid_loglik is None:
+            return self.uniform_particles(n, rng)
+        xy, _ = self.grid.draw(self._grid_loglik, n, rng)
+        return np.column_stack([xy, rng.uniform(-np.pi, np.pi, n)])
 
     def _kld_count(self, k_bins: int) -> int:
         cfg = self.cfg
@@ -276,12 +384,25 @@ class Amcl:
                 if n_next <= n_new:
                     break
                 n_new = n_next
-        if n_new != n:
+        new_weights = np.full(n_new, 1.0 / n_new)
+        if self.cfg.mode_min_particles > 0:
+            labels, _ = cluster_labels(
+                self.particles, self.weights, self.cfg.kld_bin_m, self._size_xy, _MODE_BIN_MASS
+            )
+            idx, new_weights = mode_preserving_resample(
+                self.weights, labels, n_new, self.cfg.mode_min_particles, rng
+            )
+        elif n_new != n:
             idx = systematic_resample(self.weights, n_new, rng)
         new = np.take(self.particles, idx, axis=0)
         n_random = int(rng.binomial(n_new, self.p_random)) if self.p_random > 0.0 else 0
         if n_random:
-            new[rng.choice(n_new, n_random, replace=False)] = self.uniform_particles(n_random, rng)
+            injected = rng.choice(n_new, n_random, replace=False)
+            new[injected] = self._injected(n_random, rng)
         self.n_injected = n_random
+        if n_random:
+            new_weights = new_weights.copy()
+            new_weights[injected] = 1.0 / n_new
+            new_weights /= new_weights.sum()
         self.particles = new
-        self.weights = np.full(n_new, 1.0 / n_new)
+        self.weights = new_weights

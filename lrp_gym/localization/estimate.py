@@ -22,7 +22,13 @@ class PoseEstimate:
     ess : float
         Effective sample size before resampling (0 for the look-up table).
     converged : bool
-        Whether the position standard deviation is below the configured threshold.
+        Whether the localiser vouches for the estimate: its confidence reaches the configured
+        mass and the mode is tighter than the configured spread.
+    confidence : float
+        Probability in [0, 1] that the estimate is right (for AMCL: the posterior mass of the
+        estimate's mode, discounted by the probability that the particles have lost the robot).
+    n_modes : int
+        Number of distinct posterior modes holding at least 5 % of the mass (0 if unknown).
     """
 
     pose: np.ndarray
@@ -30,6 +36,8 @@ class PoseEstimate:
     n_particles: int = 0
     ess: float = 0.0
     converged: bool = False
+    confidence: float = 0.0
+    n_modes: int = 0
 
     @property
     def position_std_m(self) -> float:

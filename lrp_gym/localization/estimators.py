@@ -79,7 +79,20 @@ def dominant_cluster(
     size_xy_m: np.ndarray,
     min_bin_mass: float = 1e-3,
 ) -> tuple[np.ndarray, float]:
-    """The heaviest cluster of particles: a boolean mask (N,) and its share of the weight.
+    """The heaviest cluster of particles: a boolean mask (N,) and its share of the weight
+    (see :func:`clusters`)."""
+    sel, masses = clusters(particles, weights, bin_m, size_xy_m, min_bin_mass)
+    return sel, float(masses[0]) if len(masses) else 0.0
+
+
+def clusters(
+    particles: np.ndarray,
+    weights: np.ndarray,
+    bin_m: float,
+    size_xy_m: np.ndarray,
+    min_bin_mass: float = 1e-3,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The modes of a particle set: the heaviest one's mask (N,) and every mode's share.
 
     Particles are binned on an (x, y) grid of ``bin_m``; bins holding at least
     ``min_bin_mass`` of the total weight and touching each other (8-connectivity) form a
@@ -87,8 +100,25 @@ def dominant_cluster(
     sprinkle of near-weightless particles (a uniform prior's remains, injected ones) from
     bridging separate modes into one. Heading is left out of the clustering (it would need
     wrap-around connectivity). With no bin above the threshold (a flat posterior) the mask
-    selects every particle and the share is 0.
+    selects every particle and no mode is returned. The shares (descending) are of the total
+    weight, so they sum to less than 1 by the weight of the light bins.
     """
+    labels, masses = cluster_labels(particles, weights, bin_m, size_xy_m, min_bin_mass)
+    if len(masses) <= 1:
+        return np.ones(len(particles), dtype=bool), np.zeros(0)
+    best = int(np.argmax(masses[1:])) + 1
+    return labels == best, -np.sort(-masses[1:])
+
+
+def cluster_labels(
+    particles: np.ndarray,
+    weights: np.ndarray,
+    bin_m: float,
+    size_xy_m: np.ndarray,
+    min_bin_mass: float = 1e-3,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Mode label of every particle (0: in a light bin, 1..K: a mode) and the weight share of
+    each label (K + 1,), labels as in :func:`clusters`."""
     n = np.maximum(np.ceil(np.asarray(size_xy_m, float) / bin_m).astype(int), 1) + 1
     # min/max instead of np.clip: same result, a fraction of the call overhead.
     ix = np.minimum(np.maximum((particles[:, 0] / bin_m).astype(np.int64), 0), n[0] - 1)
@@ -96,23 +126,20 @@ def dominant_cluster(
     flat = ix * n[1] + iy
     mass = np.bincount(flat, weights=weights, minlength=n[0] * n[1]).reshape(n)
     total = float(mass.sum())
+    out = np.zeros(len(particles), dtype=np.int64)
     if not total > 0.0:
-        return np.ones(len(particles), dtype=bool), 0.0
+        return out, np.ones(1)
     heavy = mass >= min_bin_mass * total
     rows = np.flatnonzero(heavy.any(axis=1))
     if len(rows) == 0:
-        return np.ones(len(particles), dtype=bool), 0.0
+        return out, np.ones(1)
     cols = np.flatnonzero(heavy.any(axis=0))
     # Label only the bounding box of the heavy bins (a converged set covers a few bins).
     r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
     labels, _ = ndimage.label(heavy[r0:r1, c0:c1], structure=np.ones((3, 3), dtype=bool))
-    totals = np.bincount(labels.ravel(), weights=mass[r0:r1, c0:c1].ravel())
-    totals[0] = -1.0  # background
-    best = int(np.argmax(totals))
     inside = (ix >= r0) & (ix < r1) & (iy >= c0) & (iy < c1)
-    sel = np.zeros(len(particles), dtype=bool)
-    sel[inside] = labels[ix[inside] - r0, iy[inside] - c0] == best
-    return sel, float(totals[best] / total)
+    out[inside] = labels[ix[inside] - r0, iy[inside] - c0]
+    return out, np.bincount(out, weights=weights, minlength=labels.max() + 1) / total
 
 
 def cluster_mean(

@@ -27,6 +27,14 @@ counts, wrong assignment) still scores the true pose through ``L_m``. ``s_i^2`` 
 measurement variance plus the tracker's reported variance of that distance. With ``c = 0`` the
 model is the paper's pure Gaussian (sorted assignment, or the mixture when counts differ).
 
+With Doppler (``doppler_std_mps > 0``, a fingerprint that carries radial velocities and the
+particles' velocity vectors), each reflector or structure term is multiplied by the density of
+the measured radial velocity ``v_i`` given the one the particle predicts for that return,
+``(1 - q) N(v_i; u_j, s_v^2) + q / (2 v_max)`` (``q`` the Doppler outlier probability), and
+the clutter term by ``1 / (2 v_max)``. A static reflector at horizontal offset ``p_j - x`` and
+range ``e_j`` closes at ``u_j = -v . (p_j - x) / e_j``: the robot's heading enters through its
+velocity ``v``, so moving frames weigh the heading hypotheses that the distances alone cannot.
+
 The result is invariant to the order of the measured distances (they are sorted first).
 """
 
@@ -37,7 +45,7 @@ import numpy as np
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.room import Room
-from lrp_gym.world.structure import structure_ranges_m
+from lrp_gym.world.structure import structure_ranges_m, structure_velocities_mps
 
 _LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
 
@@ -68,6 +76,26 @@ def sort_rows_inplace(values: np.ndarray) -> np.ndarray:
     return values
 
 
+def sort_rows_paired_inplace(values: np.ndarray, companion: np.ndarray) -> None:
+    """Sort ``values`` (m, N) along axis 0 in place and permute ``companion`` alongside."""
+    m = values.shape[0]
+    if m <= 1:
+        return
+    if m > 4:
+        order = np.argsort(values, axis=0)
+        values[:] = np.take_along_axis(values, order, axis=0)
+        companion[:] = np.take_along_axis(companion, order, axis=0)
+        return
+    for i, j in _NETWORKS[m]:
+        swap = values[i] > values[j]
+        lo = np.minimum(values[i], values[j])
+        np.maximum(values[i], values[j], out=values[j])
+        values[i] = lo
+        ci = np.where(swap, companion[j], companion[i])
+        np.copyto(companion[j], companion[i], where=swap)
+        companion[i] = ci
+
+
 class FingerprintModel:
     """Expected fingerprints and the measurement likelihood for floor positions.
 
@@ -88,6 +116,16 @@ class FingerprintModel:
         The room whose structure returns the model predicts (with ``structure_probability``).
     structure_probability : float
         Probability that a measured distance is a structure return of the room.
+    doppler_std_mps : float
+        Standard deviation of a measured radial velocity; 0 leaves the Doppler out.
+    doppler_outlier_probability : float
+        Probability that a return's velocity is unrelated to its predicted one (a wrong
+        Doppler peak), uniform over ``[-max_velocity_mps, max_velocity_mps]``.
+    max_velocity_mps : float
+        The radar's unambiguous velocity.
+    detection_probability : float
+        Probability that a reflector in view yields a detection; a reflector that no measured
+        distance of its type matches costs ``1 - P_D`` (0 leaves this term out).
     """
 
     def __init__(
@@ -99,8 +137,16 @@ class FingerprintModel:
         max_range_m: float = 20.0,
         room: Room | None = None,
         structure_probability: float = 0.0,
+        doppler_std_mps: float = 0.0,
+        doppler_outlier_probability: float = 0.1,
+        max_velocity_mps: float = 5.0,
+        detection_probability: float = 0.0,
     ) -> None:
         self.room = room
+        self.detection_probability = float(detection_probability)
+        self.doppler_std_mps = float(doppler_std_mps)
+        self.doppler_outlier_probability = float(doppler_outlier_probability)
+        self.velocity_density = 0.5 / float(max_velocity_mps)
         self.mount_height_m = float(mount_height_m)
         self.structure_probability = float(structure_probability) if room is not None else 0.0
         self.type_names = layout.type_names
@@ -134,13 +180,54 @@ class FingerprintModel:
             out.append(sort_rows_inplace(np.sqrt(dx, out=dx)))
         return out
 
+    def expected_with_velocity(
+        self, xy: np.ndarray, velocity_xy: np.ndarray, dtype=np.float32
+    ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+        """Sorted expected distances and, alongside, radial velocities per type.
+
+        ``velocity_xy`` (N, 2) is each position's velocity over the floor; the radial velocity
+        of a reflector is positive when its distance grows. Lists of (m_t, N) arrays.
+        """
+        x = xy[:, 0].astype(dtype)
+        y = xy[:, 1].astype(dtype)
+        vx = velocity_xy[:, 0].astype(dtype)
+        vy = velocity_xy[:, 1].astype(dtype)
+        ranges, rates = [], []
+        for rxy, dz2 in zip(self._xy, self._dz2, strict=True):
+            dx = rxy[:, 0:1].astype(dtype) - x
+            dy = rxy[:, 1:2].astype(dtype) - y
+            d = np.sqrt(dx * dx + dy * dy + dz2[:, None].astype(dtype))
+            rate = -(vx * dx + vy * dy) / d
+            sort_rows_paired_inplace(d, rate)
+            ranges.append(d)
+            rates.append(rate)
+        return ranges, rates
+
+    def _doppler_density(self, v: np.ndarray, expected_v: np.ndarray, dtype) -> np.ndarray:
+        """Density of measured velocities ``v`` (n,) given expected ones (k, N): (n, k, N)."""
+        s = self.doppler_std_mps
+        q = self.doppler_outlier_probability
+        dv = expected_v[None, :, :] - v.astype(dtype)[:, None, None]
+        dv *= dv
+        dv *= dtype(-0.5 / s**2)
+        np.exp(dv, out=dv)
+        dv *= dtype((1.0 - q) / (np.sqrt(2.0 * np.pi) * s))
+        dv += dtype(q * self.velocity_density)
+        return dv
+
     def log_likelihood(
-        self, xy: np.ndarray, fingerprint: Fingerprint, dtype=np.float32
+        self,
+        xy: np.ndarray,
+        fingerprint: Fingerprint,
+        dtype=np.float32,
+        velocity_xy: np.ndarray | None = None,
     ) -> np.ndarray:
         """Log-likelihood (N,) float64 of ``fingerprint`` at each position of ``xy`` (N, 2).
 
         Types are matched by name; a type the layout does not have is ignored (its distances
-        carry the same clutter factor for every particle). The per-particle arithmetic runs in
+        carry the same clutter factor for every particle). ``velocity_xy`` (N, 2), the velocity
+        of each position's robot over the floor, adds the Doppler term when the model has a
+        ``doppler_std_mps`` and the fingerprint carries velocities. The per-particle arithmetic runs in
         ``dtype`` (float32 by default: SIMD ``exp`` is several times faster, and distances in a
         room keep sub-micrometre precision); the per-type sums are float64.
         """
@@ -150,8 +237,21 @@ class FingerprintModel:
         structure = None
         c = self.clutter_probability
         s_prob = self.structure_probability
-        for name, z, var in zip(
-            fingerprint.type_names, fingerprint.distances_m, fingerprint.variances_m2, strict=True
+        doppler = (
+            self.doppler_std_mps > 0.0
+            and velocity_xy is not None
+            and fingerprint.velocities_mps is not None
+        )
+        velocities = (
+            fingerprint.velocities_mps if doppler else (None,) * len(fingerprint.type_names)
+        )
+        clutter_density = self.clutter_density * (self.velocity_density if doppler else 1.0)
+        for name, z, var, vel in zip(
+            fingerprint.type_names,
+            fingerprint.distances_m,
+            fingerprint.variances_m2,
+            velocities,
+            strict=True,
         ):
             if len(z) == 0 or name not in self.type_names:
                 continue
@@ -160,10 +260,16 @@ class FingerprintModel:
             if m == 0:
                 continue
             if expected is None:
-                expected = self.expected(xy, dtype)
+                if doppler:
+                    expected, expected_v = self.expected_with_velocity(xy, velocity_xy, dtype)
+                else:
+                    expected = self.expected(xy, dtype)
             e = expected[t]  # (m, N), sorted along axis 0
             order = np.argsort(z)
             z = np.asarray(z, dtype=float)[order]
+            dens_v = None
+            if doppler:
+                dens_v = self._doppler_density(np.asarray(vel)[order], expected_v[t], dtype)
             s2 = self.measurement_var_m2 + np.asarray(var, dtype=float)[order]
             half_inv = (-0.5 / s2).astype(dtype)[:, None]
             log_norm = -0.5 * np.log(2.0 * np.pi * s2)
@@ -177,6 +283,8 @@ class FingerprintModel:
             if n == m:  # diagonal = sorted-to-sorted assignment (e and z both ascending)
                 diag = r[np.arange(n), np.arange(n)]
                 diag += ln_scale
+                if dens_v is not None:
+                    diag += np.log(dens_v[np.arange(n), np.arange(n)])
                 log_sorted = diag.sum(axis=0, dtype=np.float64)
             if c == 0.0:
                 if log_sorted is None:  # no clutter floor: the mixture in the log domain
@@ -185,18 +293,34 @@ class FingerprintModel:
                 out += log_sorted
                 continue
             np.exp(r, out=r)
+            if self.detection_probability > 0.0:
+                # Negative information: a reflector that no measured distance matches was
+                # missed, which a pose that predicts it visible explains with 1 - P_D only.
+                p_d = dtype(self.detection_probability)
+                matched = r.max(axis=0)  # (m, N): kernel of each reflector's best match
+                matched *= p_d
+                matched += dtype(1.0) - p_d
+                out += np.log(matched).sum(axis=0, dtype=np.float64)
+            if dens_v is not None:
+                r *= dens_v
             g = r.mean(axis=1)  # (n, N)
             if s_prob > 0.0:
                 if structure is None:
                     structure = structure_ranges_m(self.room, self.mount_height_m, xy).astype(dtype)
+                    if doppler:
+                        structure_v = structure_velocities_mps(
+                            self.room, self.mount_height_m, xy, velocity_xy
+                        ).astype(dtype)
                 rs = structure[None, :, :] - z.astype(dtype)[:, None, None]  # (n, 9, N)
                 rs *= rs
                 rs *= half_inv[:, :, None]
                 np.exp(rs, out=rs)
+                if doppler:
+                    rs *= self._doppler_density(np.asarray(vel)[order], structure_v, dtype)
                 g *= dtype(1.0 - s_prob)
                 g += dtype(s_prob) * rs.mean(axis=1)
             g *= ((1.0 - c) * np.exp(log_norm)).astype(dtype)[:, None]
-            g += dtype(c * self.clutter_density)
+            g += dtype(c * clutter_density)
             # Every factor is >= the clutter floor: chunks of 8 cannot underflow in float32.
             log_mix = np.zeros(n_pos)
             for k in range(0, n, 8):

@@ -77,7 +77,9 @@ def track_and_localize(
     own_fit = amcl.cfg.recovery_measurements == "detections"
     if measurements == "detections":
         gated = tracker.gated_fingerprint(detections)
-        estimate = amcl.update(odometry, gated if gated.count else None, rng, recovery=own_fit)
+        estimate = amcl.update(
+            odometry, gated if gated.count else None, rng, recovery=own_fit, speed_mps=ego.speed_mps
+        )
         prior = None
         if map_aided:
             # The posterior cloud of this frame, thinned; it ranks the tracks only once

@@ -25,12 +25,16 @@ class Fingerprint:
     fresh : tuple of ndarray of bool
         True where the distance was updated by a detection in this frame; False where the
         track is coasting on its prediction.
+    velocities_mps : tuple of ndarray, optional
+        Measured radial velocity (Doppler) of each distance, positive when it grows; None when
+        the source reports none (then the positioning uses the distances only).
     """
 
     type_names: tuple[str, ...]
     distances_m: tuple[np.ndarray, ...]
     variances_m2: tuple[np.ndarray, ...]
     fresh: tuple[np.ndarray, ...]
+    velocities_mps: tuple[np.ndarray, ...] | None = None
 
     @classmethod
     def from_distances(
@@ -61,9 +65,11 @@ class Fingerprint:
 
     def fresh_only(self) -> Fingerprint:
         """Only the distances measured in this frame."""
+        vel = self.velocities_mps
         return Fingerprint(
             self.type_names,
             tuple(d[f] for d, f in zip(self.distances_m, self.fresh, strict=True)),
             tuple(v[f] for v, f in zip(self.variances_m2, self.fresh, strict=True)),
             tuple(f[f] for f in self.fresh),
+            None if vel is None else tuple(v[f] for v, f in zip(vel, self.fresh, strict=True)),
         )

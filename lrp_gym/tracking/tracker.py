@@ -252,12 +252,16 @@ class LrpTracker:
             self._gated = (detections, cand)  # update() of the same frame reuses it
         best = self.classifier.classify(detections, cand)
         var = self.cfg.measurement_std_m**2
-        dists = tuple(np.sort(detections.range_m[best == t]) for t in range(len(self.type_names)))
+        order = np.argsort(detections.range_m, kind="stable")
+        cls_sorted = best[order]
+        idx = tuple(order[cls_sorted == t] for t in range(len(self.type_names)))
+        dists = tuple(detections.range_m[i] for i in idx)
         return Fingerprint(
             self.type_names,
             dists,
             tuple(np.full(len(d), var) for d in dists),
             tuple(np.ones(len(d), dtype=bool) for d in dists),
+            tuple(detections.velocity_mps[i] for i in idx),
         )
 
     # ------------------------------------------------------------------ prediction

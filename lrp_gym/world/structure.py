@@ -25,3 +25,25 @@ def structure_ranges_m(room: Room, mount_height_m: float, xy: np.ndarray) -> np.
     walls = np.stack([x, lx - x, y, ly - y])
     up = lz - mount_height_m
     return np.concatenate([np.full((1, len(x)), up), np.sqrt(walls**2 + up**2), walls])
+
+
+def structure_velocities_mps(
+    room: Room, mount_height_m: float, xy: np.ndarray, velocity_xy: np.ndarray
+) -> np.ndarray:
+    """Radial velocities (9, N) of the returns of :func:`structure_ranges_m`, in its order.
+
+    For a radar moving at ``velocity_xy`` (N, 2) over the floor: the ceiling point overhead
+    keeps its range (0); a wall's specular point and the wall-ceiling edge's nearest point lie
+    along the wall's normal, so they close at the velocity component towards the wall, the edge
+    scaled by the horizontal share of its slant range.
+    """
+    xy = np.atleast_2d(np.asarray(xy))
+    velocity_xy = np.atleast_2d(np.asarray(velocity_xy))
+    lx, ly, _ = room.size_m
+    x, y = xy[:, 0], xy[:, 1]
+    vx, vy = velocity_xy[:, 0], velocity_xy[:, 1]
+    walls = np.stack([x, lx - x, y, ly - y])
+    towards = np.stack([-vx, vx, -vy, vy])  # velocity component towards each wall
+    up = room.size_m[2] - mount_height_m
+    edge_share = walls / np.sqrt(walls**2 + up**2)
+    return np.concatenate([np.zeros((1, len(x))), -towards * edge_share, -towards])

@@ -101,7 +101,15 @@ def test_without_recovery_the_kidnap_is_not_recovered(room):
     """The same runs with the averages frozen (alpha 0): the filter stays lost, so the test
     above measures the recovery and not the filter's ordinary tracking."""
     world, loc = room
-    off = loc.model_copy(update={"alpha_slow": 0.0, "alpha_fast": 0.0})
+    off = loc.model_copy(
+        update={
+            "alpha_slow": 0.0,
+            "alpha_fast": 0.0,
+            "global_proposal": False,
+            "mode_min_particles": 0,
+            "likelihood_exponent": 1.0,
+        }
+    )
     lost = [_drive(world, off, s, KIDNAP_FRAME + 16, kidnap=True)[0][-1] > 0.2 for s in range(6)]
     assert np.mean(lost) >= 0.5
 
@@ -109,7 +117,7 @@ def test_without_recovery_the_kidnap_is_not_recovered(room):
 @pytest.mark.parametrize("corrupt", [(0.5, 0.5), (1.0, 1.0)], ids=["mixed", "miss+clutter"])
 def test_converged_filter_on_normal_data_injects_almost_nothing(room, corrupt):
     world, loc = room
-    off = loc.model_copy(update={"alpha_slow": 0.0, "alpha_fast": 0.0})
+    off = loc.model_copy(update={"alpha_slow": 0.0, "alpha_fast": 0.0, "global_proposal": False})
     err_on, err_off, injected, updates = [], [], 0, 0
     for seed in range(8):
         e_on, inj = _drive(world, loc, 100 + seed, 50, corrupt=corrupt)
@@ -213,7 +221,9 @@ def test_dominant_cluster_mass_and_mask():
 def test_recovery_scored_later_on_another_fingerprint_equals_in_update(room):
     """update(recovery=False) + update_recovery(fp) is update(fp)'s statistic, deferred."""
     world, loc = room
-    loc = loc.model_copy(update={"initial_particles": 500, "max_particles": 500})
+    loc = loc.model_copy(
+        update={"initial_particles": 500, "max_particles": 500, "global_proposal": False}
+    )
     pose = _pose(0.3)
     fp = Fingerprint.from_true(world.layout, world.radar_position(pose[:2]), 0.05)
     odo = np.array([0.0, 0.5, 0.1])

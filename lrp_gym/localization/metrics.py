@@ -1,0 +1,91 @@
+"""How trustworthy a localiser was over episodes: localised share, time to localise,
+confidently-wrong rate and the reliability of its confidence."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+#: A position error below this counts as localised (metres).
+LOCALISED_M = 0.2
+#: A converged estimate further off than this is confidently wrong (metres).
+CONFIDENTLY_WRONG_M = 0.3
+
+
+def frames_to_localised(errors_m: np.ndarray, localised_m: float = LOCALISED_M) -> int | None:
+    """Index of the first frame with an error below ``localised_m`` (None if never)."""
+    hit = np.flatnonzero(np.asarray(errors_m) < localised_m)
+    return int(hit[0]) if len(hit) else None
+
+
+def reliability(
+    confidence: np.ndarray, errors_m: np.ndarray, bins: int = 5, localised_m: float = LOCALISED_M
+) -> list[dict[str, float | int | None]]:
+    """Reliability diagram: per confidence bin, the steps in it and their localised share.
+
+    A calibrated confidence has ``localised_share`` close to the bin's mean confidence.
+    """
+    confidence = np.asarray(confidence, dtype=float)
+    ok = np.asarray(errors_m) < localised_m
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    idx = np.clip(np.digitize(confidence, edges[1:-1]), 0, bins - 1)
+    out = []
+    for b in range(bins):
+        sel = idx == b
+        n = int(sel.sum())
+        out.append(
+            {
+                "lo": float(edges[b]),
+                "hi": float(edges[b + 1]),
+                "steps": n,
+                "mean_confidence": float(confidence[sel].mean()) if n else None,
+                "localised_share": float(ok[sel].mean()) if n else None,
+            }
+        )
+    return out
+
+
+def trust_metrics(
+    errors_m: Sequence[np.ndarray],
+    converged: Sequence[np.ndarray],
+    confidence: Sequence[np.ndarray] | None = None,
+) -> dict[str, object]:
+    """Per-episode and pooled trust metrics of a localiser.
+
+    Parameters
+    ----------
+    errors_m, converged, confidence : sequences of arrays, one per episode
+        Position error, convergence flag and confidence at each step.
+
+    Returns
+    -------
+    dict
+        ``time_localised`` (pooled share of steps), ``mean_episode_time_localised``,
+        ``median_frames_to_localised`` (episodes never localised count as their length),
+        ``never_localised_rate``, ``confidently_wrong_rate`` (share of converged steps off by
+        more than :data:`CONFIDENTLY_WRONG_M`), ``converged_share`` and, with ``confidence``,
+        ``reliability`` (:func:`reliability`).
+    """
+    err = np.concatenate([np.asarray(e, float) for e in errors_m]) if errors_m else np.zeros(0)
+    conv = np.concatenate([np.asarray(c, bool) for c in converged]) if converged else np.zeros(0)
+    first = [frames_to_localised(e) for e in errors_m]
+    frames = [f if f is not None else len(e) for f, e in zip(first, errors_m)]
+    out: dict[str, object] = {
+        "time_localised": float(np.mean(err < LOCALISED_M)) if err.size else None,
+        "mean_episode_time_localised": (
+            float(np.mean([np.mean(np.asarray(e) < LOCALISED_M) for e in errors_m if len(e)]))
+            if err.size
+            else None
+        ),
+        "median_frames_to_localised": float(np.median(frames)) if frames else None,
+        "never_localised_rate": float(np.mean([f is None for f in first])) if first else None,
+        "converged_share": float(np.mean(conv)) if conv.size else None,
+        "confidently_wrong_rate": (
+            float(np.mean(err[conv] > CONFIDENTLY_WRONG_M)) if conv.any() else None
+        ),
+    }
+    if confidence is not None and err.size:
+        conf = np.concatenate([np.asarray(c, float) for c in confidence])
+        out["reliability"] = reliability(conf, err)
+    return out

@@ -1,0 +1,130 @@
+"""Trustworthy localisation: sensor-based proposals, the lost test, mode-preserving
+resampling, and a convergence flag that means what it says."""
+
+import numpy as np
+import pytest
+
+from lrp_gym.config import load_scenario
+from lrp_gym.localization.amcl import Amcl
+from lrp_gym.localization.proposal import LostTest, MeasurementGrid
+from lrp_gym.localization.resampling import mode_preserving_resample
+from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.world import World
+from lrp_gym.world.robot import odometry_delta
+
+
+def _free_box(size):
+    return lambda xy: (
+        (xy[:, 0] > 0.2) & (xy[:, 0] < size - 0.2) & (xy[:, 1] > 0.2) & (xy[:, 1] < size - 0.2)
+    )
+
+
+def test_grid_draws_follow_the_likelihood_and_stay_free():
+    grid = MeasurementGrid(np.array([3.0, 3.0]), 0.1, _free_box(3.0))
+    target = np.array([1.25, 2.05])
+    loglik = -0.5 * np.sum((grid.centres_m - target) ** 2, axis=1) / 0.05**2
+    xy, cells = grid.draw(loglik, 4000, np.random.default_rng(0))
+    assert np.all(_free_box(3.0)(xy))
+    assert np.all(np.abs(xy - grid.centres_m[cells]) <= 0.05 + 1e-12)  # jitter within a cell
+    # Cell frequencies match exp(loglik) normalised.
+    p = np.exp(loglik - loglik.max())
+    p /= p.sum()
+    freq = np.bincount(cells, minlength=len(grid)) / len(cells)
+    assert 0.5 * np.abs(freq - p).sum() < 0.05
+    assert np.linalg.norm(xy.mean(axis=0) - target) < 0.03
+
+
+def test_lost_test_ignores_chance_deficits_and_fires_on_consistent_ones():
+    test = LostTest(drift_nats=3.0, threshold_nats=6.0)  # explicit: not the defaults
+    w = np.ones(4)
+    for _ in range(50):  # the best cell beats the cloud by less than the drift: no alarm
+        test.update(0.0, np.full(4, -2.0), w)
+    assert test.statistic_nats == 0.0 and test.p_lost < 0.01
+    for _ in range(3):  # 5 nats per frame beyond the drift-free level: 2 per frame accumulate
+        test.update(0.0, np.full(4, -5.0), w)
+    assert test.statistic_nats == pytest.approx(6.0)
+    assert test.p_lost == pytest.approx(0.5)
+    test.update(0.0, np.zeros(4), w)  # the cloud explains a frame again: evidence decays
+    assert test.statistic_nats == pytest.approx(3.0)
+
+
+def test_mode_preserving_resample_keeps_a_minority_mode_with_its_mass():
+    rng = np.random.default_rng(1)
+    n = 1000
+    weights = np.r_[np.full(900, 1.0), np.full(100, 1e-3 * 900 / 100)]  # minority: ~1e-3
+    labels = np.r_[np.ones(900, dtype=np.int64), np.full(100, 2)]
+    minority = weights[labels == 2].sum() / weights.sum()
+    idx, w = mode_preserving_resample(weights, labels, n, 50, rng)
+    assert len(idx) == n and w.sum() == pytest.approx(1.0)
+    kept = labels[idx] == 2
+    assert kept.sum() == 50
+    assert w[kept].sum() == pytest.approx(minority, rel=1e-9)
+    # Plain resampling would keep about one particle of it.
+    plain, _ = mode_preserving_resample(weights, labels, n, 0, rng)
+    assert (labels[plain] == 2).sum() <= 2
+
+
+@pytest.fixture(scope="module")
+def mirror_world():
+    """A 5 m room whose two reflectors mirror each other about x = 2.5 m: a robot at (x, y)
+    and one at (5 - x, y) with the mirrored heading see exactly the same distances, Doppler
+    and room returns, so no filter can tell them apart while the robot drives along y."""
+    cfg = load_scenario("ipin2023").with_overrides(
+        {
+            "reflectors": {
+                "layout": [
+                    {"position": [1.0, 3.5, 3.0], "type": "A"},
+                    {"position": [4.0, 3.5, 3.0], "type": "A"},
+                    {"position": [2.5, 0.6, 3.0], "type": "A"},
+                ]
+            },
+            "localization": {"initial_particles": 10000},
+        }
+    )
+    return World.from_config(cfg), cfg
+
+
+def test_an_exact_mirror_pair_is_reported_as_two_modes_not_converged(mirror_world):
+    world, cfg = mirror_world
+    poses = np.array([[1.5, 1.0 + 0.25 * k, np.pi / 2] for k in range(10)])
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        amcl = Amcl(world, cfg.localization)
+        amcl.reset(rng)
+        prev = poses[0]
+        for pose in poses:
+            fp = Fingerprint.from_true(world.layout, world.radar_position(pose[:2]))
+            est = amcl.update(odometry_delta(prev, pose), fp, rng)
+            prev = pose
+        # Both mirror images keep a share (equal in theory): the estimate vouches for neither.
+        assert not est.converged
+        assert est.n_modes >= 2
+        assert est.confidence < 0.75
+        for x in (pose[0], 5.0 - pose[0]):
+            near = np.hypot(amcl.particles[:, 0] - x, amcl.particles[:, 1] - pose[1]) < 0.3
+            assert amcl.weights[near].sum() > 0.15
+
+
+def test_global_localisation_from_a_uniform_start_on_the_two_type_layout():
+    cfg = load_scenario("ipin2023-2types")
+    world = World.from_config(cfg)
+    from lrp_gym.world.trajectory import path_trajectory
+
+    poses = path_trajectory(
+        np.asarray(cfg.task.path), cfg.robot.max_speed_mps, cfg.task.frame_period_s
+    ).poses
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        amcl = Amcl(world, cfg.localization)
+        amcl.reset(rng)
+        prev = poses[0]
+        errors, conv = [], []
+        for pose in poses:
+            fp = Fingerprint.from_true(world.layout, world.radar_position(pose[:2]))
+            est = amcl.update(odometry_delta(prev, pose), fp, rng)
+            prev = pose
+            errors.append(np.hypot(*(est.pose[:2] - pose[:2])))
+            conv.append(est.converged)
+        errors = np.array(errors)
+        assert np.all(errors[3:] < 0.1), errors
+        assert not np.any(np.array(conv) & (errors > 0.3))  # never confidently wrong
