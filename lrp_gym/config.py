@@ -370,9 +370,12 @@ class MotionNoiseConfig(Strict):
 
 
 class LocalizationConfig(Strict):
-    method: Literal["amcl", "lut"] = "amcl"
+    method: Literal["amcl", "lut", "grid"] = "amcl"
     lut_resolution_m: PositiveFloat = 0.075
     lut_grid_m: PositiveFloat = 0.025
+    # Histogram filter (method grid, lrp_gym.localization.grid): cell size in x, y and heading.
+    grid_cell_m: PositiveFloat = 0.05
+    grid_cell_deg: Annotated[float, Field(gt=0.0, le=180.0)] = 5.0
     initial_particles: Annotated[int, Field(ge=10)] = 10000
     min_particles: Annotated[int, Field(ge=10)] = 200
     max_particles: Annotated[int, Field(ge=10)] = 10000

@@ -29,10 +29,12 @@ def plot_errors(result: Reproduction, title: str = ""):
     pos = np.arange(1, result.lut_errors_m.shape[1] + 1)
     fig, ax = plt.subplots(figsize=(7, 3.5))
     runs = len(result.amcl_errors_m)
-    series = (
+    series = [
         (result.lut_errors_m, "s", "tab:orange", "look-up table"),
         (result.amcl_errors_m, "o-", "tab:blue", f"AMCL (mean +- std, {runs} runs)"),
-    )
+    ]
+    if result.grid_errors_m is not None:
+        series.append((result.grid_errors_m, "^--", "tab:green", "grid filter (mean +- std)"))
     for errors, fmt, color, label in series:
         mean, std = errors.mean(0), errors.std(0)
         # An error is never negative: the lower whisker stops at zero.
@@ -65,6 +67,12 @@ def reproduce_paper(
         help="AMCL pose estimate: cluster (heaviest cluster, the project default) or best_k "
         "(the paper's rule: 20 best particles within 15 cm of the best).",
     ),
+    localizer: str = typer.Option(
+        "amcl",
+        "--localizer",
+        help="amcl, or grid: also run the histogram filter (same models as AMCL, slow) on the "
+        "same detections and odometry, and report its errors next to AMCL's.",
+    ),
     json_path: str | None = typer.Option(
         None, "--json", help="Write the results to this JSON file."
     ),
@@ -81,9 +89,13 @@ def reproduce_paper(
         raise InputError(f"--fingerprints: expected radar or true, got {fingerprints!r}")
     if estimator not in ("cluster", "best_k"):
         raise InputError(f"--estimator: expected cluster or best_k, got {estimator!r}")
+    if localizer not in ("amcl", "grid"):
+        raise InputError(f"--localizer: expected amcl or grid, got {localizer!r}")
     if particles is not None and particles < 10:
         raise InputError(f"--particles: must be at least 10, got {particles}")
     cfg = load_scenario(scenario).with_overrides(parse_sets(sets, scenario))
+    if cfg.localization.method == "grid":  # --set localization.method=grid means the same
+        localizer = "grid"
     over: dict = {"radar": {"noise": noise == "on"}}
     if particles is not None:
         over["localization"] = {
@@ -96,9 +108,11 @@ def reproduce_paper(
         raise InputError(f"--scenario: {cfg.name} has no path (task.path needs 2+ waypoints)")
 
     def progress(run: int, info: dict) -> None:
+        grid = info.get("grid_mean_error_m")
         err_console.print(
             f"run {run + 1}/{runs}: LUT mean error {info['lut_mean_error_m']:.3f} m, "
-            f"AMCL mean error {info['amcl_mean_error_m']:.3f} m",
+            f"AMCL mean error {info['amcl_mean_error_m']:.3f} m"
+            + (f", grid mean error {grid:.3f} m" if grid is not None else ""),
             highlight=False,
         )
 
@@ -109,18 +123,25 @@ def reproduce_paper(
         progress=progress,
         true_fingerprints=fingerprints == "true",
         estimator=estimator,
+        localizer=localizer,
     )
     data = result.to_dict()
     table = Table(title=f"{cfg.name}: position errors [m] (noise {noise}, {runs} runs)")
-    for col in ("pos", "LUT mean", "AMCL mean", "AMCL std", "particles"):
+    grid = data.get("grid")
+    cols = ("pos", "LUT mean", "AMCL mean", "AMCL std", "particles")
+    for col in cols + (("grid mean", "grid std") if grid else ()):
         table.add_column(col, justify="right")
     for i in range(data["positions"]):
+        extra = (
+            (f"{grid['mean_errors_m'][i]:.3f}", f"{grid['std_errors_m'][i]:.3f}") if grid else ()
+        )
         table.add_row(
             str(i + 1),
             f"{data['lut']['errors_m'][i]:.3f}",
             f"{data['amcl']['mean_errors_m'][i]:.3f}",
             f"{data['amcl']['std_errors_m'][i]:.3f}",
             f"{data['amcl']['mean_particles'][i]:.0f}",
+            *extra,
         )
     console.print(table)
     conv = data["amcl"]["converged_after"]
@@ -131,6 +152,13 @@ def reproduce_paper(
         f"(paper {PAPER['lut_entries']}; fails at 9 and 12 with ~3.5 m and ~1 m)",
         highlight=False,
     )
+    if grid:
+        conv = grid["converged_after"]
+        console.print(
+            f"grid filter mean error {grid['mean_error_m']:.3f} m, converged after "
+            f"{conv if conv is not None else 'never'} (same detections and odometry as AMCL)",
+            highlight=False,
+        )
     ms = data["frame_ms"]
     console.print(
         "time per frame: " + ", ".join(f"{k} {v:.2f} ms" for k, v in ms.items()), highlight=False

@@ -18,8 +18,8 @@ from gymnasium import spaces
 from lrp_gym.config import ScenarioConfig, load_scenario
 from lrp_gym.envs.observations import NavSnapshot, make_observation
 from lrp_gym.envs.task import WaypointPath, sample_goal_task
-from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.estimate import PoseEstimate
+from lrp_gym.localization.factory import make_localizer
 from lrp_gym.localization.lut import LookupTable
 from lrp_gym.localization.pipeline import track_and_localize
 from lrp_gym.perturbations import FrameContext, PerturbationSet
@@ -114,7 +114,7 @@ class LRPRadarNavEnv(gym.Env):
         self.perturbations: PerturbationSet | None = perturbations if len(perturbations) else None
         self.tracker = LrpTracker.from_world(self.world, self.cfg.tracking)
         loc = self.cfg.localization
-        self.localizer = Amcl(self.world, loc)
+        self.localizer = make_localizer(self.world, loc)
         self.lut = (
             LookupTable(self.world, loc.lut_resolution_m, loc.lut_grid_m)
             if loc.method == "lut"

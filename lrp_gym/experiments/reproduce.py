@@ -4,6 +4,11 @@ Full chain per frame: signal-level radar (multipath) -> CFAR detections -> LRP t
 fingerprint -> look-up table and AMCL. The path is driven at ``robot.max_speed_mps`` with one
 frame every ``task.frame_period_s``; AMCL receives the true odometry between consecutive poses
 plus the robot's odometry noise (``world.odometry_noise``), drawn from the run's generator.
+
+With ``localizer="grid"`` the histogram filter (:class:`~lrp_gym.localization.grid.GridFilter`)
+runs alongside, with a tracker of its own, on the same detections and odometry. It draws no
+random numbers, so the run's generator, hence the detections and AMCL's errors, are exactly
+those of a run without it.
 """
 
 from __future__ import annotations
@@ -16,8 +21,13 @@ import numpy as np
 
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
+from lrp_gym.localization.estimate import PoseEstimate
+from lrp_gym.localization.factory import Localizer, make_localizer
 from lrp_gym.localization.lut import LookupTable
+from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.tracking.motion import EgoMotion
+from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world.robot import odometry_delta
 from lrp_gym.world.trajectory import path_trajectory
 from lrp_gym.world.world import World
@@ -44,6 +54,7 @@ class Reproduction:
     true_poses: np.ndarray
     amcl_particles: np.ndarray  # (runs, K)
     meta: dict = field(default_factory=dict)
+    grid_errors_m: np.ndarray | None = None  # (runs, K), with localizer="grid"
 
     @property
     def converged_after(self) -> int | None:
@@ -72,6 +83,20 @@ class Reproduction:
             "frame_ms": self.frame_ms,
             "paper": PAPER,
             **self.meta,
+            **self._grid_dict(),
+        }
+
+    def _grid_dict(self) -> dict:
+        if self.grid_errors_m is None:
+            return {}
+        mean = self.grid_errors_m.mean(axis=0)
+        return {
+            "grid": {
+                "mean_errors_m": mean,
+                "std_errors_m": self.grid_errors_m.std(axis=0),
+                "mean_error_m": float(mean.mean()),
+                "converged_after": converged_after(mean),
+            }
         }
 
 
@@ -92,6 +117,42 @@ def _odometry(world: World, prev: np.ndarray, pose: np.ndarray, frame: int, rng)
     return world.odometry_noise.sample(odometry_delta(prev, pose), (), rng)
 
 
+@dataclass
+class _Chain:
+    """Identification and positioning of one localiser: its tracker, itself, its estimate."""
+
+    tracker: LrpTracker
+    localizer: Localizer
+    estimate: PoseEstimate | None = None
+
+    def step(
+        self,
+        world: World,
+        cfg: ScenarioConfig,
+        frame: Detections | Fingerprint,
+        ego: EgoMotion,
+        rng: np.random.Generator,
+    ) -> Fingerprint:
+        """One frame: radar detections through the tracker, or a true fingerprint directly."""
+        from lrp_gym.localization.pipeline import track_and_localize
+
+        if isinstance(frame, Fingerprint):
+            self.estimate = self.localizer.update(ego.odometry, frame, rng)
+            return frame
+        fp, self.estimate = track_and_localize(
+            world,
+            self.tracker,
+            self.localizer,
+            frame,
+            cfg.task.frame_period_s,
+            ego,
+            self.estimate,
+            rng,
+            measurements=cfg.localization.measurements,
+        )
+        return fp
+
+
 def reproduce(
     cfg: ScenarioConfig,
     runs: int = 10,
@@ -99,6 +160,7 @@ def reproduce(
     progress: Callable[[int, dict], None] | None = None,
     true_fingerprints: bool = False,
     estimator: str = "best_k",
+    localizer: str = "amcl",
 ) -> Reproduction:
     """Run the full chain ``runs`` times along ``cfg.task.path``.
 
@@ -118,12 +180,14 @@ def reproduce(
     estimator : {"best_k", "cluster"}
         AMCL's pose estimate: the paper's rule (weighted mean of the 20 best particles within
         15 cm of the best) or the mean of the heaviest cluster.
+    localizer : {"amcl", "grid"}
+        ``grid``: run the histogram filter too, on the same detections and odometry (its
+        errors in ``grid_errors_m``; AMCL's are unchanged).
     """
-    from lrp_gym.localization.pipeline import track_and_localize
     from lrp_gym.radar.sensor import RadarSensor
-    from lrp_gym.tracking.motion import EgoMotion
-    from lrp_gym.tracking.tracker import LrpTracker
 
+    if localizer not in ("amcl", "grid"):
+        raise ValueError(f"localizer must be amcl or grid, got {localizer!r}")
     if len(cfg.task.path) < 2:
         raise ValueError("the scenario has no path (task.path needs at least 2 waypoints)")
     world = World.from_config(cfg)
@@ -138,58 +202,58 @@ def reproduce(
     k = len(traj)
     lut_err = np.zeros((runs, k))
     amcl_err = np.zeros((runs, k))
+    grid_err = np.zeros((runs, k)) if localizer == "grid" else None
     n_part = np.zeros((runs, k), dtype=int)
     timing = {"radar": 0.0, "tracking_amcl": 0.0, "lut": 0.0}
+    if grid_err is not None:
+        timing["tracking_grid"] = 0.0
     children = np.random.SeedSequence(seed).spawn(runs)
     for run in range(runs):
         rng = np.random.default_rng(children[run])
-        tracker = LrpTracker.from_world(world, cfg.tracking)
-        amcl = Amcl(world, loc)
-        amcl.reset(rng, traj.poses[0] if loc.init == "gaussian" else None)
+        start = traj.poses[0] if loc.init == "gaussian" else None
+        chains = [_Chain(LrpTracker.from_world(world, cfg.tracking), Amcl(world, loc))]
+        if grid_err is not None:
+            grid_loc = loc.model_copy(update={"method": "grid"})
+            chains.append(
+                _Chain(LrpTracker.from_world(world, cfg.tracking), make_localizer(world, grid_loc))
+            )
+        for chain in chains:
+            chain.localizer.reset(rng, start)
         prev = traj.poses[0]
-        est = None
         for i, (pose, vel) in enumerate(zip(traj.poses, traj.velocities_xy_mps, strict=True)):
             t = time.perf_counter()
             if true_fingerprints:
-                fp = Fingerprint.from_true(
+                frame = Fingerprint.from_true(
                     world.layout, world.radar_position(pose[:2]), cfg.tracking.measurement_std_m
                 )
-                t1 = time.perf_counter()
-                odo = _odometry(world, prev, pose, i, rng)
-                est = amcl.update(odo, fp, rng)
             else:
-                dets = sensor.measure(pose, vel, rng)
-                t1 = time.perf_counter()
-                odo = _odometry(world, prev, pose, i, rng)
-                fp, est = track_and_localize(
-                    world,
-                    tracker,
-                    amcl,
-                    dets,
-                    cfg.task.frame_period_s,
-                    EgoMotion.from_velocity(vel, pose[2], odo),
-                    est,
-                    rng,
-                    measurements=loc.measurements,
-                )
+                frame = sensor.measure(pose, vel, rng)
+            t1 = time.perf_counter()
+            ego = EgoMotion.from_velocity(vel, pose[2], _odometry(world, prev, pose, i, rng))
+            fp = chains[0].step(world, cfg, frame, ego, rng)
             t2 = time.perf_counter()
             lut_est = lut.query(fp)
             t3 = time.perf_counter()
-            prev = pose
-            for key, dt in zip(timing, (t1 - t, t2 - t1, t3 - t2), strict=True):
+            for key, dt in zip(timing, (t1 - t, t2 - t1, t3 - t2), strict=False):
                 timing[key] += dt
+            if grid_err is not None:
+                chains[1].step(world, cfg, frame, ego, rng)  # draws nothing from rng
+                timing["tracking_grid"] += time.perf_counter() - t3
+                grid_err[run, i] = np.hypot(*(chains[1].estimate.pose[:2] - pose[:2]))
+            prev = pose
+            est = chains[0].estimate
             lut_err[run, i] = np.hypot(*(lut_est.pose[:2] - pose[:2]))
             amcl_err[run, i] = np.hypot(*(est.pose[:2] - pose[:2]))
             n_part[run, i] = est.n_particles
         if progress is not None:
-            progress(
-                run,
-                {
-                    "lut_mean_error_m": float(lut_err[run].mean()),
-                    "amcl_mean_error_m": float(amcl_err[run].mean()),
-                    "amcl_errors_m": amcl_err[run].copy(),
-                },
-            )
+            info = {
+                "lut_mean_error_m": float(lut_err[run].mean()),
+                "amcl_mean_error_m": float(amcl_err[run].mean()),
+                "amcl_errors_m": amcl_err[run].copy(),
+            }
+            if grid_err is not None:
+                info["grid_mean_error_m"] = float(grid_err[run].mean())
+            progress(run, info)
     frames = runs * k
     frame_ms = {key: 1e3 * v / frames for key, v in timing.items()}
     frame_ms["total"] = sum(frame_ms.values())
@@ -210,5 +274,7 @@ def reproduce(
             "initial_particles": loc.initial_particles,
             "lut_build_s": lut_build_s,
             "lut_ambiguous_entries": int(np.sum(lut.regions_per_entry > 1)),
+            "localizer": localizer,
         },
+        grid_errors_m=grid_err,
     )

@@ -1,7 +1,9 @@
-"""Positioning from LRP fingerprints: look-up table and AMCL."""
+"""Positioning from LRP fingerprints: look-up table, AMCL and the histogram (grid) filter."""
 
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.estimate import PoseEstimate
+from lrp_gym.localization.factory import Localizer, make_localizer
+from lrp_gym.localization.grid import GridFilter
 from lrp_gym.localization.lut import LookupTable
 
-__all__ = ["Amcl", "LookupTable", "PoseEstimate"]
+__all__ = ["Amcl", "GridFilter", "Localizer", "LookupTable", "PoseEstimate", "make_localizer"]

@@ -41,7 +41,7 @@ from lrp_gym.localization.estimators import (
 )
 from lrp_gym.localization.kld import KldBinner, kld_particle_count
 from lrp_gym.localization.likelihood import FingerprintModel
-from lrp_gym.localization.motion import sample_motion
+from lrp_gym.localization.motion import odometry_noise, sample_motion
 from lrp_gym.localization.proposal import LostTest, MeasurementGrid
 from lrp_gym.localization.resampling import (
     effective_sample_size,
@@ -49,7 +49,6 @@ from lrp_gym.localization.resampling import (
     systematic_resample,
 )
 from lrp_gym.tracking.fingerprint import Fingerprint
-from lrp_gym.world.robot import OdometryNoise
 from lrp_gym.world.world import World
 
 #: Particles on which the recovery's measurement fit is evaluated (a strided subsample).
@@ -83,23 +82,8 @@ class Amcl:
     def __init__(self, world: World, cfg: LocalizationConfig) -> None:
         self.world = world
         self.cfg = cfg
-        self.model = FingerprintModel(
-            world.layout,
-            world.mount_height_m,
-            cfg.measurement_std_m,
-            cfg.clutter_probability,
-            world.fmcw.max_range_m,
-            room=world.room,
-            structure_probability=cfg.structure_probability,
-            doppler_std_mps=cfg.doppler_std_mps,
-            doppler_outlier_probability=cfg.doppler_outlier_probability,
-            max_velocity_mps=world.fmcw.max_velocity_mps,
-            detection_probability=cfg.detection_probability,
-        )
-        mn = cfg.motion_noise
-        self.motion_noise = OdometryNoise(
-            np.deg2rad(mn.sigma_turn_deg), mn.sigma_distance_m, tuple(mn.alphas)
-        )
+        self.model = FingerprintModel.for_world(world, cfg)
+        self.motion_noise = odometry_noise(cfg)
         self.clearance_m = float(world.robot.radius_m)
         self._size_xy = np.asarray(world.room.size_m[:2], dtype=float)
         self._simple_room = not world.room.obstacles

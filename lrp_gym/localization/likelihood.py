@@ -40,12 +40,18 @@ The result is invariant to the order of the measured distances (they are sorted 
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.room import Room
 from lrp_gym.world.structure import structure_ranges_m, structure_velocities_mps
+
+if TYPE_CHECKING:
+    from lrp_gym.config import LocalizationConfig
+    from lrp_gym.world.world import World
 
 _LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
 
@@ -160,6 +166,24 @@ class FingerprintModel:
         self.measurement_var_m2 = float(measurement_std_m) ** 2
         self.clutter_probability = float(clutter_probability)
         self.clutter_density = 1.0 / float(max_range_m)
+
+    @classmethod
+    def for_world(cls, world: World, cfg: LocalizationConfig) -> FingerprintModel:
+        """The localisers' model of ``world``: its layout, radar height and range, and room
+        structure, with the measurement, clutter and structure settings of ``cfg``."""
+        return cls(
+            world.layout,
+            world.mount_height_m,
+            cfg.measurement_std_m,
+            cfg.clutter_probability,
+            world.fmcw.max_range_m,
+            room=world.room,
+            structure_probability=cfg.structure_probability,
+            doppler_std_mps=cfg.doppler_std_mps,
+            doppler_outlier_probability=cfg.doppler_outlier_probability,
+            max_velocity_mps=world.fmcw.max_velocity_mps,
+            detection_probability=cfg.detection_probability,
+        )
 
     def expected(self, xy: np.ndarray, dtype=np.float64) -> list[np.ndarray]:
         """Sorted expected distances per type for positions (N, 2): list of (m_t, N) arrays.

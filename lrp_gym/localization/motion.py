@@ -2,11 +2,22 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from lrp_gym.world.robot import OdometryNoise
 
+if TYPE_CHECKING:
+    from lrp_gym.config import LocalizationConfig
+
 _TWO_PI_32 = np.float32(2.0 * np.pi)
+
+
+def odometry_noise(cfg: LocalizationConfig) -> OdometryNoise:
+    """The localisers' motion noise from ``cfg.motion_noise`` (turn sigma in degrees)."""
+    mn = cfg.motion_noise
+    return OdometryNoise(np.deg2rad(mn.sigma_turn_deg), mn.sigma_distance_m, tuple(mn.alphas))
 
 
 def standard_normals32(rng: np.random.Generator, n: int) -> np.ndarray:

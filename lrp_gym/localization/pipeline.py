@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.estimate import PoseEstimate
+from lrp_gym.localization.factory import Localizer
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.motion import EgoMotion
@@ -25,7 +25,7 @@ from lrp_gym.world.world import World
 def track_and_localize(
     world: World,
     tracker: LrpTracker,
-    amcl: Amcl,
+    amcl: Localizer,
     detections: Detections,
     dt_s: float,
     ego: EgoMotion,
@@ -42,7 +42,8 @@ def track_and_localize(
     ----------
     world : World
     tracker : LrpTracker
-    amcl : Amcl
+    amcl : Amcl or GridFilter
+        The localiser (AMCL's interface; "AMCL" below).
     detections : Detections
         This frame's radar output.
     dt_s : float

@@ -91,7 +91,7 @@ def run_path(
     robot's (noisy) odometry and predicts static points (:mod:`lrp_gym.tracking.motion`),
     else the paper's constant-velocity model.
     """
-    from lrp_gym.localization.amcl import Amcl
+    from lrp_gym.localization.factory import make_localizer
     from lrp_gym.localization.pipeline import track_and_localize
     from lrp_gym.radar.sensor import RadarSensor
 
@@ -105,7 +105,7 @@ def run_path(
     rng = np.random.default_rng(seed)
     odo_rng = np.random.default_rng([seed, 1])  # odometry noise apart from the radar's
     ego = ego_motions(traj, world, odo_rng)
-    amcl = Amcl(world, cfg.localization)
+    amcl = make_localizer(world, cfg.localization)
     amcl.reset(rng, traj.poses[0] if cfg.localization.init == "gaussian" else None)
     est = None
     ti = world.layout.type_index

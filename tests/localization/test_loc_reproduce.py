@@ -50,3 +50,34 @@ def test_reproduce_paper_rejects_bad_noise():
     with pytest.raises(SystemExit) as exc:
         main(["reproduce-paper", "--noise", "maybe"])
     assert exc.value.code == 2
+
+
+def test_grid_runs_on_the_same_detections_without_changing_amcl(paper_cfg):
+    from lrp_gym.experiments.reproduce import reproduce
+
+    cfg = paper_cfg.with_overrides(
+        {
+            "radar": {"noise": False},
+            "localization": {
+                "initial_particles": 1000,
+                "max_particles": 1000,
+                "grid_cell_m": 0.1,
+                "grid_cell_deg": 10.0,
+            },
+        }
+    )
+    alone = reproduce(cfg, runs=1, seed=3, estimator="cluster")
+    both = reproduce(cfg, runs=1, seed=3, estimator="cluster", localizer="grid")
+    # The grid draws nothing: same generator stream, so the same detections, LUT and AMCL.
+    np.testing.assert_array_equal(both.amcl_errors_m, alone.amcl_errors_m)
+    np.testing.assert_array_equal(both.lut_errors_m, alone.lut_errors_m)
+    assert alone.grid_errors_m is None and "grid" not in alone.to_dict()
+    grid = both.to_dict()["grid"]
+    assert grid["mean_error_m"] < 0.15, grid
+    assert len(grid["mean_errors_m"]) == 15
+
+
+def test_reproduce_paper_rejects_an_unknown_localizer():
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce-paper", "--localizer", "kalman"])
+    assert exc.value.code == 2
