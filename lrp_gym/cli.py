@@ -68,7 +68,8 @@ def usage_message(exc: typer.TyperException) -> str:
     hint = getattr(exc, "param_hint", None)
     if param is not None or hint is not None:
         if hint is None:
-            hint = param.get_error_hint(exc.ctx) if getattr(exc, "ctx", None) else param.name
+            opts = getattr(param, "opts", None) or []
+            hint = " / ".join(opts) if opts and opts[0].startswith("-") else param.name.upper()
         if not isinstance(hint, str):
             hint = " / ".join(hint)
         text = f"{hint.replace(chr(39), '')}: {exc.message}"

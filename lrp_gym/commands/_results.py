@@ -128,7 +128,7 @@ ROWS: tuple[Row, ...] = (
         ("track", "--seed", "0"),
         lambda r, _: (
             f"tracked RMSE {r['tracked_rmse_m']:.3f} m (raw detections {r['raw_rmse_m']:.3f} m), "
-            f"{r['swaps']} swaps; seeds 0-4: see [docs/tracking.md](docs/tracking.md)"
+            f"swaps: {r['swaps']}; seeds 0-4: see [docs/tracking.md](docs/tracking.md)"
         ),
         typed="0.086 m over seeds 0-4 (0.076-0.129), 1-6 swaps",
     ),
