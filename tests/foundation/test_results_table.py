@@ -30,9 +30,12 @@ def test_missed_and_not_regenerated_marks():
     assert res.render_row(row, {row.key: base | {"search_s": 25.0}}).count("(missed)") == 1
     assert "(not regenerated)" in res.render_row(row, {})
     ppo = next(r for r in res.ROWS if r.key == "ppo_goal")
-    m = {"success_rate": 0.92, "collision_rate": 0.0, "mean_loc_error_m": 0.2}
+    m = {"success_rate": 0.95, "collision_rate": 0.0, "mean_loc_error_m": 0.2}
     m |= {"p95_loc_error_m": 0.5}
-    assert "(missed)" in res.render_row(ppo, {"ppo_goal": m, "pp_goal": m | {"success_rate": 1}})
+    pp = m | {"success_rate": 0.92}
+    assert "(missed)" not in res.render_row(ppo, {"ppo_goal": m, "pp_goal": pp})
+    low = m | {"success_rate": 0.85}
+    assert "(missed)" in res.render_row(ppo, {"ppo_goal": low, "pp_goal": pp})
 
 
 def test_report_check_and_bad_only(capsys):
