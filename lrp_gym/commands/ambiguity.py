@@ -6,9 +6,20 @@ import time
 
 import typer
 
-from lrp_gym.commands._common import ScenarioArg, console, print_json, save_figure
-from lrp_gym.config import load_scenario
-from lrp_gym.errors import InputError
+from lrp_gym.commands._common import (
+    at_least,
+    check_output,
+    console,
+    force_option,
+    json_option,
+    load_config,
+    plot_option,
+    print_json,
+    save_figure,
+    scenario_argument,
+    sets_option,
+    wrote,
+)
 
 
 def print_summary(summary: dict) -> None:
@@ -30,39 +41,42 @@ def print_summary(summary: dict) -> None:
 
 
 def ambiguity(
-    scenario: str = typer.Argument(..., help=ScenarioArg),
-    plot: str = typer.Option(None, "--plot", help="Write the ambiguity map to this image file."),
+    scenario: str = scenario_argument(),
     grid_m: float = typer.Option(
-        None, "--grid", help="Grid cell size in metres (default placement.grid_m)."
+        None, "--grid", metavar="METRES", help="Grid cell size [m] (default placement.grid_m)."
     ),
-    json_out: bool = typer.Option(False, "--json", help="Print the figures as JSON."),
+    sets: list[str] = sets_option(),
+    plot: str = plot_option("the ambiguity map"),
+    force: bool = force_option(),
+    json_out: bool = json_option("the figures"),
 ) -> None:
     """Analyse the fingerprint ambiguities of SCENARIO's reflector layout.
 
-    Prints the ambiguous area fraction (systematic and random), whether the layout satisfies the
-    symmetry constraint, and the number of distinct fingerprints at the look-up-table resolution.
+    Prints the ambiguous area fraction (systematic and random), whether the layout satisfies
+    the symmetry constraint, and the number of distinct fingerprints at the look-up-table
+    resolution.
     """
     from lrp_gym.placement.scenario import analyse_scenario
 
-    if grid_m is not None and not (grid_m > 0 and grid_m < float("inf")):
-        raise InputError(f"--grid: must be a positive finite number, got {grid_m:g}")
-    cfg = load_scenario(scenario)
+    at_least(grid_m, 1e-6, "--grid")
+    plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
+    cfg = load_config(scenario, sets)
     start = time.perf_counter()
     result = analyse_scenario(cfg, grid_m)
     summary = result.summary() | {"elapsed_s": time.perf_counter() - start}
-    if plot:
+    if plot_path is not None:
         from lrp_gym.placement.plot import plot_scenario_map
 
-        save_figure(plot_scenario_map(cfg, result), plot)
-        summary["plot"] = plot
+        save_figure(plot_scenario_map(cfg, result), plot_path)
+        summary["plot"] = str(plot_path)
     if json_out:
         print_json(summary)
-        return
-    print_summary(summary)
-    console.print(
-        f"analysed in {summary['elapsed_s']:.2f} s" + (f"; map written to {plot}" if plot else "")
-    )
+    else:
+        print_summary(summary)
+        console.print(f"analysed in {summary['elapsed_s']:.2f} s")
+    if plot_path is not None:
+        wrote(plot_path, quiet=json_out)
 
 
 def register(app: typer.Typer) -> None:
-    app.command("ambiguity")(ambiguity)
+    app.command("ambiguity", short_help="Fingerprint ambiguity analysis and map.")(ambiguity)

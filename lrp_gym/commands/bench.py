@@ -7,9 +7,16 @@ import importlib
 import typer
 from rich.table import Table
 
-from lrp_gym.commands._common import console, print_json
-from lrp_gym.config import load_scenario
-from lrp_gym.errors import InputError
+from lrp_gym.commands._common import (
+    at_least,
+    choice,
+    console,
+    json_option,
+    load_config,
+    print_json,
+    scenario_argument,
+    sets_option,
+)
 
 # component -> (module, function); each function takes (scenario_config, seconds) -> dict
 COMPONENTS = {
@@ -21,23 +28,25 @@ COMPONENTS = {
 
 
 def bench(
+    scenario: str = scenario_argument(),
     component: str = typer.Option(
-        "all", "--component", "-c", help="radar, tracking, amcl, env or all."
+        "all",
+        "--component",
+        "-c",
+        metavar="NAME",
+        help="radar, tracking, amcl, env or all.",
     ),
-    scenario: str = typer.Option("ipin2023", help="Scenario for the component benchmarks."),
-    seconds: float = typer.Option(3.0, min=0.1, help="Measuring time per figure."),
-    json_out: bool = typer.Option(False, "--json", help="Print the figures as JSON."),
+    seconds: float = typer.Option(
+        3.0, "--seconds", metavar="SECONDS", help="Measuring time per figure [s] (>= 0.1)."
+    ),
+    sets: list[str] = sets_option(),
+    json_out: bool = json_option("the figures"),
 ) -> None:
     """Measure speed on one core: radar frames/s, AMCL update time, env steps/s."""
-    if not seconds < float("inf"):  # nan and inf pass typer's min=0.1
-        raise InputError(f"--seconds: must be a finite number, got {seconds:g}")
+    at_least(seconds, 0.1, "--seconds")
+    choice(component, (*COMPONENTS, "all"), "--component")
     names = list(COMPONENTS) if component == "all" else [component]
-    unknown = [n for n in names if n not in COMPONENTS]
-    if unknown:
-        raise InputError(
-            f"--component: unknown {unknown[0]!r}; choose from {', '.join(COMPONENTS)} or all"
-        )
-    cfg = load_scenario(scenario)
+    cfg = load_config(scenario, sets)
     _pin_to_one_core()
     results: dict = {}
     for name in names:
@@ -49,7 +58,7 @@ def bench(
     if json_out:
         print_json(results)
         return
-    table = Table(title="lrp-gym benchmark (one core)")
+    table = Table(title="lrp-gym benchmark (one core; units in the figure names)")
     table.add_column("figure")
     table.add_column("value", justify="right")
 
@@ -73,4 +82,4 @@ def _pin_to_one_core() -> None:
 
 
 def register(app: typer.Typer) -> None:
-    app.command("bench")(bench)
+    app.command("bench", short_help="Speed: radar frames/s, AMCL update time, env steps/s.")(bench)

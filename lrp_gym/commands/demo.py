@@ -1,4 +1,4 @@
-"""``lrp-gym demo``: pure pursuit drives the paper's path on the full radar chain."""
+"""``lrp-gym demo``: pure pursuit drives the scenario's path on the full radar chain."""
 
 from __future__ import annotations
 
@@ -6,87 +6,146 @@ from pathlib import Path
 
 import typer
 
-from lrp_gym.commands._common import console, write_json
+from lrp_gym.commands._common import (
+    FIDELITIES,
+    check_output,
+    choice,
+    console,
+    json_option,
+    overrides,
+    print_json,
+    scenario_argument,
+    seed_option,
+    sets_option,
+    table,
+    write_json,
+    wrote,
+)
 from lrp_gym.errors import InputError
 
 DEMO_ENV = "LRPRadarNav-v0"
-DEMO_SCENARIO = "ipin2023"
+COLUMNS = ("step", "true x [m]", "true y [m]", "est x [m]", "est y [m]", "error [m]")
+COLUMNS += ("std [m]", "dets", "conv")
 
 
 def demo(
+    scenario: str = scenario_argument(),
     steps: int = typer.Option(
-        200, "--steps", help="Most frames to drive (the episode may end sooner)."
+        200, "--steps", metavar="N", help="Most frames to drive (the episode may end sooner)."
     ),
+    seed: int = seed_option("Seed of the episode (radar noise, odometry, AMCL)."),
+    fidelity: str | None = typer.Option(
+        None,
+        "--fidelity",
+        metavar="signal|detections",
+        help="Radar model (default: the scenario's radar.fidelity, signal for ipin2023).",
+    ),
+    sets: list[str] = sets_option(),
     out: Path = typer.Option(
-        Path("outputs/demo"), "--out", help="Folder for the plot and the summary JSON."
+        Path("outputs/demo"),
+        "--out",
+        metavar="FOLDER",
+        help="Run folder: trajectory.png and summary.json are written (replaced) there.",
     ),
-    seed: int = typer.Option(
-        0, "--seed", help="Seed of the episode (radar noise, odometry, AMCL)."
-    ),
+    json_out: bool = json_option("the summary"),
 ) -> None:
-    """Drive the paper's 15-waypoint path with pure pursuit on the radar/AMCL estimate.
+    """Drive SCENARIO's path with pure pursuit on the radar/AMCL estimate.
 
-    Runs the signal-level radar (FMCW beat signal, FFT, CFAR), LRP tracking and AMCL every
-    frame, prints true vs estimated position per step, and writes ``trajectory.png`` and
-    ``summary.json`` into ``--out``.
+    Runs the radar (FMCW beat signal, FFT, CFAR at the signal fidelity), LRP tracking and AMCL
+    every frame, prints true vs estimated position per step, and writes trajectory.png and
+    summary.json into the --out folder.
     """
     if steps < 1:
         raise InputError(f"--steps: must be at least 1, got {steps}")
+    choice(fidelity, FIDELITIES, "--fidelity")
+    folder = check_output(out, "--out", directory=True)
+    for name in ("trajectory.png", "summary.json"):
+        if (folder / name).is_dir():
+            raise InputError(f"--out: {folder / name} is a folder, expected a file name")
+    over = overrides(scenario, sets, fidelity)
     import gymnasium as gym
-    import numpy as np
-    from rich.table import Table
 
     import lrp_gym  # noqa: F401  (registers the env ids)
-    from agents.evaluate import LOCALISED_M, cross_track_m
     from agents.plotting import save_trajectory
+
+    env = gym.make(
+        DEMO_ENV,
+        scenario=scenario,
+        overrides=over or None,
+        task_mode="path",
+        max_episode_steps=steps,
+    )
+    try:
+        rows, tracks, info = _drive(env, seed)
+        summary = _summary(env.unwrapped, scenario, seed, tracks, info)
+    finally:
+        env.close()
+    if not json_out:
+        t = table(f"pure pursuit on {DEMO_ENV}, scenario {scenario}, seed {seed}", COLUMNS)
+        for row in rows:
+            t.add_row(*row)
+        console.print(t)
+        _print(summary)
+    else:
+        print_json(summary)
+    n = summary["steps"]
+    title = (
+        f"{'reached the goal' if summary['success'] else 'did not reach the goal'} in "
+        f"{n} frames, mean error {summary['mean_loc_error_m']:.3f} m"
+    )
+    base = env.unwrapped
+    png = save_trajectory(
+        folder / "trajectory.png", base.world, tracks[0], tracks[1], base.path.waypoints_m, title
+    )
+    wrote(png, quiet=json_out)
+    wrote(write_json(summary, folder / "summary.json"), quiet=json_out)
+
+
+def _drive(env, seed: int):
+    """Run one episode; per-step table rows, (true, estimated) xy arrays and the last info."""
+    import numpy as np
+
+    from agents.evaluate import LOCALISED_M
     from agents.pure_pursuit import PurePursuitPolicy
 
-    env = gym.make(DEMO_ENV, scenario=DEMO_SCENARIO, max_episode_steps=steps)
     policy = PurePursuitPolicy.from_env(env)
     obs, info = env.reset(seed=seed)
-    base = env.unwrapped
-    table = Table(title=f"pure pursuit on {DEMO_ENV}, scenario {DEMO_SCENARIO}, seed {seed}")
-    for col in (
-        "step",
-        "true x",
-        "true y",
-        "est x",
-        "est y",
-        "error [m]",
-        "std [m]",
-        "dets",
-        "conv",
-    ):
-        table.add_column(col, justify="right")
-    true_xy, est_xy, errors = [info["true_pose"][:2]], [info["est_pose"][:2]], []
-    done, n = False, 0
+    true_xy, est_xy, rows, errors = [info["true_pose"][:2]], [info["est_pose"][:2]], [], []
+    done = False
     while not done:
         action, _ = policy.predict(obs)
         obs, _, terminated, truncated, info = env.step(action)
         done = terminated or truncated
-        n += 1
         t, e, err = info["true_pose"], info["est_pose"], info["position_error_m"]
         true_xy.append(t[:2])
         est_xy.append(e[:2])
         errors.append(err)
         colour = "green" if err < LOCALISED_M else "red"
-        table.add_row(
-            str(n),
-            f"{t[0]:.3f}",
-            f"{t[1]:.3f}",
-            f"{e[0]:.3f}",
-            f"{e[1]:.3f}",
-            f"[{colour}]{err:.3f}[/]",
-            f"{max(info['pose_std'][:2]):.3f}",
-            str(info["n_detections"]),
-            "yes" if info["converged"] else "no",
+        rows.append(
+            (
+                str(len(rows) + 1),
+                *(f"{v:.3f}" for v in (t[0], t[1], e[0], e[1])),
+                f"[{colour}]{err:.3f}[/]",
+                f"{max(info['pose_std'][:2]):.3f}",
+                str(info["n_detections"]),
+                "yes" if info["converged"] else "no",
+            )
         )
-    console.print(table)
-    true_xy, est_xy, err = np.asarray(true_xy), np.asarray(est_xy), np.asarray(errors)
+    return rows, (np.asarray(true_xy), np.asarray(est_xy), np.asarray(errors)), info
+
+
+def _summary(base, scenario: str, seed: int, tracks, info) -> dict:
+    import numpy as np
+
+    from agents.evaluate import LOCALISED_M, cross_track_m
+
+    true_xy, est_xy, err = tracks
+    n = len(err)
     waypoints = base.path.waypoints_m
-    summary = {
+    return {
         "env_id": DEMO_ENV,
-        "scenario": DEMO_SCENARIO,
+        "scenario": scenario,
+        "fidelity": base.cfg.radar.fidelity,
         "seed": seed,
         "steps": n,
         "success": bool(info["is_success"]),
@@ -102,23 +161,17 @@ def demo(
         "est_xy": est_xy,
         "waypoints_m": waypoints,
     }
-    out.mkdir(parents=True, exist_ok=True)
-    title = (
-        f"{'reached the goal' if summary['success'] else 'did not reach the goal'} in "
-        f"{n} frames, mean error {summary['mean_loc_error_m']:.3f} m"
-    )
-    png = save_trajectory(out / "trajectory.png", base.world, true_xy, est_xy, waypoints, title)
-    js = write_json(summary, out / "summary.json")
-    env.close()
-    state = "[green]goal reached[/]" if summary["success"] else "[red]goal not reached[/]"
+
+
+def _print(s: dict) -> None:
+    state = "[green]goal reached[/]" if s["success"] else "[red]goal not reached[/]"
     console.print(
-        f"{state} after {n} frames ({summary['time_s']:.2f} s); localisation error mean "
-        f"{summary['mean_loc_error_m']:.3f} m, p95 {summary['p95_loc_error_m']:.3f} m, "
-        f"max {summary['max_loc_error_m']:.3f} m; localised {100 * summary['time_localised']:.0f} % "
+        f"{state} after {s['steps']} frames ({s['time_s']:.2f} s); localisation error mean "
+        f"{s['mean_loc_error_m']:.3f} m, p95 {s['p95_loc_error_m']:.3f} m, "
+        f"max {s['max_loc_error_m']:.3f} m; localised {100 * s['time_localised']:.0f} % "
         f"of the time"
     )
-    console.print(f"wrote {png} and {js}")
 
 
 def register(app: typer.Typer) -> None:
-    app.command("demo")(demo)
+    app.command("demo", short_help="Pure pursuit drives the path on the radar/AMCL estimate.")(demo)

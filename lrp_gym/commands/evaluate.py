@@ -6,95 +6,154 @@ from pathlib import Path
 
 import typer
 
-from lrp_gym.commands._common import SetHelp, console, parse_sets, print_json
+from lrp_gym.commands._common import (
+    FIDELITIES,
+    check_distinct,
+    check_output,
+    choice,
+    console,
+    fidelity_option,
+    force_option,
+    json_option,
+    out_option,
+    overrides,
+    print_json,
+    scenario_argument,
+    seed_option,
+    sets_option,
+    write_json,
+    wrote,
+)
 from lrp_gym.errors import InputError
 
 AGENT_NAMES = ("pure-pursuit", "ppo", "random", "oracle")
+TASKS = ("path", "goal")
 
 
-def evaluate(
-    agent: str = typer.Option(
-        "pure-pursuit", "--agent", help="pure-pursuit | ppo | random | oracle"
-    ),
-    model: Path = typer.Option(None, "--model", help="PPO model zip (default: the shipped one)."),
-    env: str = typer.Option(
-        None, "--env", help="Env id (default LRPRadarNav-v0; oracle: LRPRadarNavOracle-v0)."
-    ),
-    scenario: str = typer.Option(
-        None, "--scenario", help="Scenario YAML or name (default: sampled goals in the paper room)."
-    ),
-    task: str = typer.Option(
+def agent_option() -> typer.Option:
+    """``--agent`` (shared with robustness)."""
+    return typer.Option(
+        "pure-pursuit", "--agent", metavar="NAME", help=f"{' | '.join(AGENT_NAMES)}."
+    )
+
+
+def model_option() -> typer.Option:
+    """``--model`` (shared with robustness)."""
+    return typer.Option(
+        None, "--model", metavar="FILE.zip", help="PPO model zip (default: the shipped one)."
+    )
+
+
+def env_option() -> typer.Option:
+    """``--env``: the Gymnasium env id the agent drives in (shared with robustness)."""
+    return typer.Option(
+        None,
+        "--env",
+        metavar="ENV_ID",
+        help="Env id the agent drives in (default LRPRadarNav-v0; --agent oracle: "
+        "LRPRadarNavOracle-v0). For the radar model use --fidelity.",
+    )
+
+
+def task_option() -> typer.Option:
+    """``--task path|goal`` (shared with robustness)."""
+    return typer.Option(
         None,
         "--task",
-        help="path | goal: override the scenario's task mode (e.g. sampled goals in another "
-        "layout).",
-    ),
-    episodes: int = typer.Option(
-        20, "--episodes", help="Number of episodes (seeds seed, seed+1, ...)."
-    ),
-    seed: int = typer.Option(0, "--seed", help="Seed of the first episode."),
-    json_out: bool = typer.Option(False, "--json", help="Print the metrics as JSON only."),
-    gif: Path = typer.Option(None, "--gif", help="Write the first episode as an animated GIF."),
-    out: Path = typer.Option(None, "--out", help="Also write the metrics JSON to this file."),
-    sets: list[str] = typer.Option(None, "--set", help=SetHelp),
-) -> None:
-    """Evaluate an agent: success, collisions, time to goal, localisation and cross-track error."""
-    if agent not in AGENT_NAMES:
-        raise InputError(
-            f"--agent: unknown agent {agent!r}; choose one of {', '.join(AGENT_NAMES)}"
-        )
+        metavar="path|goal",
+        help="path: follow the scenario's path; goal: sampled start poses and goals in its "
+        "room. Default: the scenario's task.mode (path for ipin2023).",
+    )
+
+
+def episodes_option(what: str = "Number of episodes") -> typer.Option:
+    """``--episodes N`` (shared with robustness, same default)."""
+    return typer.Option(20, "--episodes", metavar="N", help=f"{what} (seeds seed, seed+1, ...).")
+
+
+def check_agent(agent: str, model: Path | None, task: str | None, episodes: int) -> None:
+    """The checks evaluate and robustness share, before any work."""
+    choice(agent, AGENT_NAMES, "--agent")
     if episodes < 1:
         raise InputError(f"--episodes: must be at least 1, got {episodes}")
     if model is not None and agent != "ppo":
         raise InputError("--model: only used with --agent ppo")
-    if task is not None and task not in ("path", "goal"):
-        raise InputError(f"--task: must be 'path' or 'goal', got {task!r}")
+    choice(task, TASKS, "--task")
+
+
+def evaluate(
+    scenario: str = scenario_argument(),
+    agent: str = agent_option(),
+    model: Path = model_option(),
+    env: str = env_option(),
+    task: str = task_option(),
+    fidelity: str = fidelity_option(),
+    sets: list[str] = sets_option(),
+    episodes: int = episodes_option(),
+    seed: int = seed_option("Seed of the first episode."),
+    out: Path = out_option("the metrics as JSON"),
+    gif: Path = typer.Option(
+        None, "--gif", metavar="FILE.gif", help="Write the first episode as an animated GIF."
+    ),
+    force: bool = force_option(),
+    json_out: bool = json_option("the metrics"),
+) -> None:
+    """Evaluate an agent: success, collisions, time to goal, localisation and cross-track
+    error."""
+    check_agent(agent, model, task, episodes)
+    choice(fidelity, FIDELITIES, "--fidelity")
+    out_path = check_output(out, "--out", force, (".json",))
+    gif_path = check_output(gif, "--gif", force, (".gif",))
+    check_distinct(out_path, gif_path)
     from agents import evaluate as ev
-    from lrp_gym.commands._common import write_json
     from lrp_gym.config import deep_merge
 
-    overrides = parse_sets(sets, scenario)
+    over = overrides(scenario, sets, fidelity)
     if task is not None:
-        overrides = deep_merge(overrides, {"task": {"mode": task}})
+        over = deep_merge(over, {"task": {"mode": task}})
     env_obj = ev.make_eval_env(
-        agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=overrides or None
+        agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=over or None
     )
     policy = ev.make_agent(agent, env_obj, model, seed)
     env_id = env_obj.spec.id if env_obj.spec is not None else env
-
-    def show(res) -> None:
-        if not json_out:
-            mark = (
-                "[green]goal[/]"
-                if res.success
-                else ("[red]collision[/]" if res.collision else "[yellow]timeout[/]")
-            )
-            err = f"{res.loc_error_m.mean():.3f}" if res.steps else "-"
-            console.print(
-                f"seed {res.seed}: {mark} after {res.steps} steps, mean loc error {err} m"
-            )
-
-    summary = ev.evaluate(policy, env_obj, episodes, seed, gif_path=gif, progress=show)
-    env_obj.close()
+    cfg = env_obj.unwrapped.cfg
+    try:
+        summary = ev.evaluate(
+            policy, env_obj, episodes, seed, gif_path=gif_path, progress=None if json_out else _show
+        )
+    finally:
+        env_obj.close()
     doc = {
         "agent": agent,
         "env_id": env_id,
         "scenario": scenario,
-        "task": task,
+        "task": cfg.task.mode,
+        "fidelity": cfg.radar.fidelity,
+        "sets": list(sets or []),
         "model": str(model or ev.DEFAULT_MODEL) if agent == "ppo" else None,
         **ev.public(summary),
     }
-    if out is not None:
-        write_json(doc, out)
+    if out_path is not None:
+        write_json(doc, out_path)
     if json_out:
         print_json(doc)
-        return
-    console.print(
-        ev.summary_table(summary, title=f"{agent} on {env_id}, seeds {seed}..{seed + episodes - 1}")
+    else:
+        title = f"{agent} on {env_id} ({scenario}, {cfg.task.mode}), seeds {seed}..{seed + episodes - 1}"
+        console.print(ev.summary_table(summary, title=title))
+    for p in (gif_path, out_path):
+        if p is not None:
+            wrote(p, quiet=json_out)
+
+
+def _show(res) -> None:
+    mark = (
+        "[green]goal[/]"
+        if res.success
+        else ("[red]collision[/]" if res.collision else "[yellow]timeout[/]")
     )
-    if gif:
-        console.print(f"wrote {gif}")
+    err = f"{res.loc_error_m.mean():.3f}" if res.steps else "-"
+    console.print(f"seed {res.seed}: {mark} after {res.steps} steps, mean loc error {err} m")
 
 
 def register(app: typer.Typer) -> None:
-    app.command("evaluate")(evaluate)
+    app.command("evaluate", short_help="Evaluate an agent on fixed seeds.")(evaluate)

@@ -1,43 +1,70 @@
-"""``lrp-gym radar``: one radar frame at a pose, detections and true LRP distances."""
+"""``lrp-gym radar`` and ``radar-rate``: one radar frame at a pose; LRP delivery rates."""
 
 from __future__ import annotations
 
 import numpy as np
 import typer
-from rich.table import Table
 
-from lrp_gym.commands._common import ScenarioArg, console, print_json, save_figure
-from lrp_gym.config import load_scenario
+from lrp_gym.commands._common import (
+    FIDELITIES,
+    at_least,
+    check_output,
+    choice,
+    console,
+    fidelity_option,
+    force_option,
+    json_option,
+    load_config,
+    plot_option,
+    print_json,
+    save_figure,
+    scenario_argument,
+    seed_option,
+    sets_option,
+    table,
+    wrote,
+)
 from lrp_gym.errors import InputError
 from lrp_gym.world import World
 
+DETECTION_KEYS = ("range_m", "velocity_mps", "power_dbm", "rcs_dbsm", "snr_db")
+
 
 def radar(
-    scenario: str = typer.Argument(..., help=ScenarioArg),
-    pose: tuple[float, float, float] = typer.Option(..., "--pose", help="X Y THETA (m, m, rad)."),
-    velocity: float = typer.Option(0.0, "--velocity", help="Forward speed along THETA [m/s]."),
-    seed: int = typer.Option(0, "--seed", help="Random seed (noise)."),
-    plot: str | None = typer.Option(None, "--plot", help="Save the range-Doppler map (PNG)."),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON only."),
+    scenario: str = scenario_argument(),
+    pose: tuple[float, float, float] = typer.Option(
+        ..., "--pose", metavar="X Y THETA", help="Radar pose: x [m], y [m], heading [rad]."
+    ),
+    velocity: float = typer.Option(
+        0.0, "--velocity", metavar="M_PER_S", help="Forward speed along THETA [m/s]."
+    ),
+    seed: int = seed_option("Seed of the thermal noise."),
+    sets: list[str] = sets_option(),
+    plot: str | None = plot_option("the range-Doppler map"),
+    force: bool = force_option(),
+    json_out: bool = json_option("the detections and true distances"),
 ) -> None:
-    """Simulate one radar frame at --pose and print the detections and true LRP distances."""
+    """Simulate one signal-level radar frame at --pose.
+
+    Prints the detections (range, radial velocity, power, RCS, SNR) and the true distances to
+    the LRPs.
+    """
     from lrp_gym.radar.sensor import RadarSensor
 
-    if not np.isfinite(velocity):
-        raise InputError(f"--velocity: must be a finite number, got {velocity:g}")
-    cfg = load_scenario(scenario)
+    at_least(velocity, -float("inf"), "--velocity")
+    plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
+    cfg = load_config(scenario, sets)
     world = World.from_config(cfg)
     p = np.asarray(pose, float)
     if not np.all(np.isfinite(p)) or not bool(world.room.free(p[:2])):
         raise InputError(
             f"--pose: position ({p[0]:g}, {p[1]:g}) is outside the room or inside an obstacle"
         )
-    radar_cfg = cfg.radar.model_copy(update={"fidelity": "signal"})
-    sensor = RadarSensor(world, radar_cfg)
+    sensor = RadarSensor(world, cfg.radar.model_copy(update={"fidelity": "signal"}))
     vel = velocity * np.array([np.cos(p[2]), np.sin(p[2])])
     det = sensor.measure(p, vel, np.random.default_rng(seed))
     true = world.true_distances_m(p[:2])
-    if plot:
+    if plot_path is not None:
         from lrp_gym.radar.plotting import plot_range_doppler
 
         fig = plot_range_doppler(
@@ -46,60 +73,60 @@ def radar(
             sensor.processor.velocity_axis_mps,
             det,
             true,
-            title=f"{cfg.name} at ({p[0]:g}, {p[1]:g}, {p[2]:g})",
+            title=f"{cfg.name} at ({p[0]:g} m, {p[1]:g} m, {p[2]:g} rad)",
         )
-        save_figure(fig, plot)
+        save_figure(fig, plot_path)
+        wrote(plot_path, quiet=json_out)
+    records = [{k: r[k] for k in DETECTION_KEYS} for r in det.to_records()]
     if json_out:
-        print_json(
-            {
-                "true_lrp_distances_m": true,
-                "detections": [
-                    {k: r[k] for k in ("range_m", "velocity_mps", "rcs_dbsm", "snr_db")}
-                    for r in det.to_records()
-                ],
-            }
-        )
+        print_json({"true_lrp_distances_m": true, "detections": records})
         return
-    table = Table(title=f"{len(det)} detections")
-    for col in ("range [m]", "velocity [m/s]", "power [dBm]", "RCS [dBsm]", "SNR [dB]"):
-        table.add_column(col, justify="right")
-    for r in det.to_records():
-        table.add_row(
-            *(f"{r[k]:.3f}" for k in ("range_m", "velocity_mps")),
-            *(f"{r[k]:.1f}" for k in ("power_dbm", "rcs_dbsm", "snr_db")),
+    cols = ("range [m]", "velocity [m/s]", "power [dBm]", "RCS [dBsm]", "SNR [dB]")
+    t = table(f"{len(det)} detections", cols)
+    for r in records:
+        t.add_row(
+            *(f"{r[k]:.3f}" for k in DETECTION_KEYS[:2]),
+            *(f"{r[k]:.1f}" for k in DETECTION_KEYS[2:]),
         )
-    console.print(table)
-    console.print("true LRP distances (m): " + ", ".join(f"{d:.3f}" for d in true))
-    if plot:
-        console.print(f"saved {plot}")
+    console.print(t)
+    console.print("true LRP distances [m]: " + ", ".join(f"{d:.3f}" for d in true), markup=False)
 
 
 def radar_rate(
-    scenario: str = typer.Argument(..., help=ScenarioArg),
-    poses: int = typer.Option(300, "--poses", min=1, help="Random free poses."),
-    seed: int = typer.Option(0, "--seed", help="Seed of the poses and the noise."),
-    fidelity: str = typer.Option("signal", "--fidelity", help="signal or detections."),
-    json_out: bool = typer.Option(False, "--json", help="Print JSON only."),
+    scenario: str = scenario_argument(),
+    poses: int = typer.Option(300, "--poses", metavar="N", help="Random free poses (>= 1)."),
+    seed: int = seed_option("Seed of the poses and the noise."),
+    fidelity: str | None = fidelity_option(),
+    sets: list[str] = sets_option(),
+    json_out: bool = json_option(),
 ) -> None:
-    """How often each LRP is detected within 10 cm with an RCS inside the tracker's window."""
+    """How often the radar delivers each LRP: detected within 10 cm with an RCS inside the
+    tracker's window, per LRP and in total."""
     from lrp_gym.radar.evaluate import lrp_detection_rate
 
-    if fidelity not in ("signal", "detections"):
-        raise InputError(f"--fidelity: expected signal or detections, got {fidelity!r}")
-    cfg = load_scenario(scenario)
-    res = lrp_detection_rate(cfg, poses, seed, fidelity=fidelity)
+    if poses < 1:
+        raise InputError(f"--poses: must be at least 1, got {poses}")
+    choice(fidelity, FIDELITIES, "--fidelity")
+    cfg = load_config(scenario, sets, fidelity)
+    res = lrp_detection_rate(cfg, poses, seed)
+    fid = cfg.radar.fidelity
     if json_out:
-        print_json({"scenario": cfg.name, "fidelity": fidelity, **res.as_dict()})
+        print_json({"scenario": cfg.name, "fidelity": fid, **res.as_dict()})
         return
+    console.print(f"{cfg.name}, {fid} radar, {poses} poses, seed {seed}:", markup=False)
+    t = table("delivered per LRP", ("LRP", "type", "delivered"))
+    for i, (r, rate) in enumerate(zip(cfg.reflectors.layout, res.per_lrp_rate, strict=True)):
+        t.add_row(f"#{i}", r.type, f"{100 * rate:.1f} %")
+    console.print(t)
     console.print(
-        f"{cfg.name} ({fidelity}, {poses} poses): LRPs delivered {100 * res.rate:.1f} % "
-        f"(within 10 cm: {100 * res.range_only_rate:.1f} %), "
-        f"median RCS error {res.median_rcs_error_db:+.2f} dB, "
+        f"all LRPs: delivered {100 * res.rate:.1f} % (within 10 cm: "
+        f"{100 * res.range_only_rate:.1f} %), median RCS error {res.median_rcs_error_db:+.2f} dB, "
         f"range error std {100 * res.range_error_std_m:.2f} cm, "
-        f"{res.mean_detections:.1f} detections/frame"
+        f"{res.mean_detections:.1f} detections/frame",
+        markup=False,
     )
 
 
 def register(app: typer.Typer) -> None:
-    app.command("radar")(radar)
-    app.command("radar-rate")(radar_rate)
+    app.command("radar", short_help="One radar frame at a pose: detections, true distances.")(radar)
+    app.command("radar-rate", short_help="How often the radar delivers each LRP.")(radar_rate)

@@ -4,99 +4,149 @@ from __future__ import annotations
 
 import numpy as np
 import typer
-from rich.console import Console
-from rich.table import Table
 
 from lrp_gym.commands._common import (
-    ScenarioArg,
-    SetHelp,
+    FIDELITIES,
+    check_distinct,
+    check_output,
+    choice,
     console,
-    parse_sets,
+    err_console,
+    fidelity_option,
+    force_option,
+    json_option,
+    load_config,
+    out_option,
+    plot_option,
+    print_json,
     save_figure,
+    scenario_argument,
+    seed_option,
+    sets_option,
+    table,
     write_json,
+    wrote,
 )
-from lrp_gym.config import load_scenario
 from lrp_gym.errors import InputError
 from lrp_gym.experiments.reproduce import PAPER, Reproduction, reproduce
 
-err_console = Console(stderr=True)
+ESTIMATORS = ("cluster", "best_k")
+FLOOR_M = 1e-3  # log axis: an exact hit is drawn at 1 mm
 
 
 def plot_errors(result: Reproduction, title: str = ""):
-    """Figure in the style of the paper's error plot: LUT markers, AMCL mean +- std."""
+    """Per-position errors on a log axis: ours (median, whiskers min..max over the runs) and
+    the paper's published values (LUT failures, AMCL mean, AMCL convergence)."""
     import matplotlib.pyplot as plt
 
     pos = np.arange(1, result.lut_errors_m.shape[1] + 1)
-    fig, ax = plt.subplots(figsize=(7, 3.5))
+    fig, ax = plt.subplots(figsize=(7.5, 4))
     runs = len(result.amcl_errors_m)
     series = [
-        (result.lut_errors_m, "s", "tab:orange", "look-up table"),
-        (result.amcl_errors_m, "o-", "tab:blue", f"AMCL (mean +- std, {runs} runs)"),
+        (result.lut_errors_m, "s", "tab:orange", -0.12, "look-up table"),
+        (result.amcl_errors_m, "o-", "tab:blue", 0.12, "AMCL"),
     ]
     if result.grid_errors_m is not None:
-        series.append((result.grid_errors_m, "^--", "tab:green", "grid filter (mean +- std)"))
-    for errors, fmt, color, label in series:
-        mean, std = errors.mean(0), errors.std(0)
-        # An error is never negative: the lower whisker stops at zero.
-        yerr = np.vstack([np.minimum(std, mean), std])
-        ax.errorbar(pos, mean, yerr=yerr, fmt=fmt, color=color, capsize=3, label=label)
+        series.append((result.grid_errors_m, "^--", "tab:green", 0.0, "grid filter"))
+    for errors, fmt, color, dx, label in series:
+        e = np.maximum(errors, FLOOR_M)
+        mid, lo, hi = np.median(e, 0), e.min(0), e.max(0)
+        ax.errorbar(
+            pos + dx,
+            mid,
+            yerr=np.vstack([mid - lo, hi - mid]),
+            fmt=fmt,
+            color=color,
+            capsize=3,
+            ms=5,
+            label=f"{label}: median, bars min–max ({runs} runs)",
+        )
+    fail = PAPER["lut_failures_m"]
+    ax.plot(
+        list(fail),
+        list(fail.values()),
+        "x",
+        color="tab:red",
+        ms=9,
+        mew=2,
+        label="paper: look-up table failures",
+    )
+    ax.axhline(
+        PAPER["amcl_mean_error_m"],
+        color="tab:blue",
+        ls="--",
+        lw=1,
+        label=f"paper: AMCL mean error {PAPER['amcl_mean_error_m']} m",
+    )
+    ax.axvline(
+        PAPER["amcl_converged_after"],
+        color="grey",
+        ls=":",
+        lw=1,
+        label=f"paper: AMCL converged at position {PAPER['amcl_converged_after']}",
+    )
+    ax.set_yscale("log")
+    ax.set_ylim(FLOOR_M * 0.8, None)
     ax.set_xlabel("position on the path")
-    ax.set_ylabel("position error [m]")
-    ax.set_yscale("symlog", linthresh=0.1)
-    ax.set_ylim(bottom=0.0)
+    ax.set_ylabel("position error [m] (log scale)")
     ax.set_xticks(pos)
-    ax.grid(True, alpha=0.3)
-    ax.legend()
+    ax.grid(True, which="both", alpha=0.25)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     if title:
-        ax.set_title(title)
+        ax.set_title(title, fontsize=10)
     return fig
 
 
 def reproduce_paper(
-    scenario: str = typer.Option("ipin2023", "--scenario", help=ScenarioArg),
-    runs: int = typer.Option(10, "--runs", help="Independent runs."),
-    seed: int = typer.Option(0, "--seed", help="Root seed."),
-    noise: str = typer.Option("off", "--noise", help="Thermal noise: off (the paper) or on."),
-    fingerprints: str = typer.Option(
-        "radar", "--fingerprints", help="radar (full chain) or true (bypass radar and tracker)."
+    scenario: str = scenario_argument(),
+    runs: int = typer.Option(10, "--runs", metavar="N", help="Independent runs."),
+    seed: int = seed_option("Root seed."),
+    noise: bool = typer.Option(
+        False, "--noise/--no-noise", help="Thermal noise in the radar (the paper: off)."
     ),
-    particles: int | None = typer.Option(None, "--particles", help="Override N0 (and max)."),
+    fidelity: str = fidelity_option(),
+    true_fingerprints: bool = typer.Option(
+        False,
+        "--true-fingerprints/--no-true-fingerprints",
+        help="Feed the true distances to the look-up table and AMCL (bypass radar and tracker).",
+    ),
+    particles: int | None = typer.Option(
+        None, "--particles", metavar="N", help="Override the initial (and most) particles."
+    ),
     estimator: str = typer.Option(
         "cluster",
         "--estimator",
+        metavar="cluster|best_k",
         help="AMCL pose estimate: cluster (heaviest cluster, the project default) or best_k "
         "(the paper's rule: 20 best particles within 15 cm of the best).",
     ),
     localizer: str = typer.Option(
         "amcl",
         "--localizer",
-        help="amcl, or grid: also run the histogram filter (same models as AMCL, slow) on the "
-        "same detections and odometry, and report its errors next to AMCL's.",
+        metavar="amcl|grid",
+        help="amcl, or grid: also run the histogram (Bayes yardstick) filter with AMCL's "
+        "models on the same detections and odometry; slow.",
     ),
-    json_path: str | None = typer.Option(
-        None, "--json", help="Write the results to this JSON file."
-    ),
-    plot_path: str | None = typer.Option(None, "--plot", help="Save the error figure here."),
-    sets: list[str] = typer.Option(None, "--set", help=SetHelp),
+    sets: list[str] = sets_option(),
+    out: str | None = out_option("the results as JSON"),
+    plot: str | None = plot_option("the error figure"),
+    force: bool = force_option(),
+    json_out: bool = json_option("the results"),
 ) -> None:
-    """Run the full chain (radar, CFAR, tracking, look-up table, AMCL) along the scenario's path
-    and compare the per-position errors with the paper's."""
+    """Run the full chain (radar, CFAR, tracking, look-up table, AMCL) along the scenario's
+    path and compare the per-position errors with the paper's."""
     if runs < 1:
         raise InputError(f"--runs: must be at least 1, got {runs}")
-    if noise not in ("off", "on"):
-        raise InputError(f"--noise: expected off or on, got {noise!r}")
-    if fingerprints not in ("radar", "true"):
-        raise InputError(f"--fingerprints: expected radar or true, got {fingerprints!r}")
-    if estimator not in ("cluster", "best_k"):
-        raise InputError(f"--estimator: expected cluster or best_k, got {estimator!r}")
-    if localizer not in ("amcl", "grid"):
-        raise InputError(f"--localizer: expected amcl or grid, got {localizer!r}")
+    choice(fidelity, FIDELITIES, "--fidelity")
+    choice(estimator, ESTIMATORS, "--estimator")
+    choice(localizer, ("amcl", "grid"), "--localizer")
     if particles is not None and particles < 10:
         raise InputError(f"--particles: must be at least 10, got {particles}")
-    cfg = load_scenario(scenario).with_overrides(parse_sets(sets, scenario))
-    if cfg.localization.method == "grid":  # --set localization.method=grid means the same
-        localizer = "grid"
-    over: dict = {"radar": {"noise": noise == "on"}}
+    out_path = check_output(out, "--out", force, (".json",))
+    plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
+    check_distinct(out_path, plot_path)
+    cfg = load_config(scenario, sets, fidelity)
+    over: dict = {"radar": {"noise": noise}}
     if particles is not None:
         over["localization"] = {
             "initial_particles": particles,
@@ -104,8 +154,10 @@ def reproduce_paper(
             "min_particles": min(cfg.localization.min_particles, particles),
         }
     cfg = cfg.with_overrides(over)
+    if cfg.localization.method == "grid":  # --set localization.method=grid means the same
+        localizer = "grid"
     if len(cfg.task.path) < 2:
-        raise InputError(f"--scenario: {cfg.name} has no path (task.path needs 2+ waypoints)")
+        raise InputError(f"SCENARIO: {cfg.name} has no path (task.path needs 2+ waypoints)")
 
     def progress(run: int, info: dict) -> None:
         grid = info.get("grid_mean_error_m")
@@ -121,29 +173,54 @@ def reproduce_paper(
         runs=runs,
         seed=seed,
         progress=progress,
-        true_fingerprints=fingerprints == "true",
+        true_fingerprints=true_fingerprints,
         estimator=estimator,
         localizer=localizer,
     )
-    data = result.to_dict()
-    table = Table(title=f"{cfg.name}: position errors [m] (noise {noise}, {runs} runs)")
+    data = result.to_dict() | {"noise": noise, "fidelity": cfg.radar.fidelity}
+    if out_path is not None:
+        write_json(data, out_path)
+    if plot_path is not None:
+        noise_txt = "noise on" if noise else "noise off"
+        save_figure(plot_errors(result, f"{cfg.name}, {noise_txt}, {estimator}"), plot_path)
+    if json_out:
+        print_json(data)
+    else:
+        _print(cfg.name, data, noise)
+    for p in (out_path, plot_path):
+        if p is not None:
+            wrote(p, quiet=json_out)
+
+
+def _print(name: str, data: dict, noise: bool) -> None:
     grid = data.get("grid")
-    cols = ("pos", "LUT mean", "AMCL mean", "AMCL std", "particles")
-    for col in cols + (("grid mean", "grid std") if grid else ()):
-        table.add_column(col, justify="right")
+    cols = ("pos", "LUT mean [m]", "AMCL mean [m]", "AMCL std [m]", "particles")
+    if grid:
+        cols += ("grid mean [m]", "grid std [m]")
+    t = table(
+        f"{name}: position errors (noise {'on' if noise else 'off'}, {data['runs']} runs)", cols
+    )
     for i in range(data["positions"]):
-        extra = (
-            (f"{grid['mean_errors_m'][i]:.3f}", f"{grid['std_errors_m'][i]:.3f}") if grid else ()
-        )
-        table.add_row(
+        t.add_row(
             str(i + 1),
             f"{data['lut']['errors_m'][i]:.3f}",
             f"{data['amcl']['mean_errors_m'][i]:.3f}",
             f"{data['amcl']['std_errors_m'][i]:.3f}",
             f"{data['amcl']['mean_particles'][i]:.0f}",
-            *extra,
+            *(
+                (f"{grid['mean_errors_m'][i]:.3f}", f"{grid['std_errors_m'][i]:.3f}")
+                if grid
+                else ()
+            ),
         )
-    console.print(table)
+    console.print(t)
+    if grid:
+        conv_g = grid["converged_after"]
+        console.print(
+            f"grid filter mean error {grid['mean_error_m']:.3f} m, converged after "
+            f"{conv_g if conv_g is not None else 'never'}",
+            highlight=False,
+        )
     conv = data["amcl"]["converged_after"]
     console.print(
         f"AMCL mean error {data['amcl']['mean_error_m']:.3f} m (paper ~{PAPER['amcl_mean_error_m']} m); "
@@ -152,22 +229,13 @@ def reproduce_paper(
         f"(paper {PAPER['lut_entries']}; fails at 9 and 12 with ~3.5 m and ~1 m)",
         highlight=False,
     )
-    if grid:
-        conv = grid["converged_after"]
-        console.print(
-            f"grid filter mean error {grid['mean_error_m']:.3f} m, converged after "
-            f"{conv if conv is not None else 'never'} (same detections and odometry as AMCL)",
-            highlight=False,
-        )
     ms = data["frame_ms"]
     console.print(
         "time per frame: " + ", ".join(f"{k} {v:.2f} ms" for k, v in ms.items()), highlight=False
     )
-    if json_path:
-        write_json(data, json_path)
-    if plot_path:
-        save_figure(plot_errors(result, f"{cfg.name}, noise {noise}"), plot_path)
 
 
 def register(app: typer.Typer) -> None:
-    app.command("reproduce-paper")(reproduce_paper)
+    app.command("reproduce-paper", short_help="The paper's experiment: look-up table vs AMCL.")(
+        reproduce_paper
+    )

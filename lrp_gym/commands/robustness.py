@@ -6,7 +6,35 @@ from pathlib import Path
 
 import typer
 
-from lrp_gym.commands._common import SetHelp, console, parse_sets, print_json, save_figure
+from lrp_gym.commands._common import (
+    FIDELITIES,
+    check_distinct,
+    check_output,
+    choice,
+    console,
+    fidelity_option,
+    force_option,
+    json_option,
+    out_option,
+    overrides,
+    plot_option,
+    print_json,
+    save_figure,
+    scenario_argument,
+    seed_option,
+    sets_option,
+    table,
+    write_json,
+    wrote,
+)
+from lrp_gym.commands.evaluate import (
+    agent_option,
+    check_agent,
+    env_option,
+    episodes_option,
+    model_option,
+    task_option,
+)
 from lrp_gym.errors import InputError
 
 
@@ -21,33 +49,31 @@ def _floats(text: str, flag: str) -> list[float]:
 
 
 def robustness(
-    agent: str = typer.Option(
-        "pure-pursuit", "--agent", help="pure-pursuit | ppo | oracle | random"
-    ),
-    model: Path = typer.Option(None, "--model", help="PPO model zip (default: the shipped one)."),
-    env: str = typer.Option(
-        "LRPRadarNavFast-v0", "--env", help="Env id: LRPRadarNavFast-v0 or LRPRadarNav-v0."
-    ),
-    task: str = typer.Option(
-        "path", "--task", help="path (paper scenario ipin2023) | goal (sampled goals)."
-    ),
-    episodes: int = typer.Option(
-        10, "--episodes", help="Episodes per cell (seeds seed, seed+1, ...)."
-    ),
+    scenario: str = scenario_argument(),
+    agent: str = agent_option(),
+    model: Path = model_option(),
+    env: str = env_option(),
+    task: str = task_option(),
+    fidelity: str = fidelity_option(),
+    sets: list[str] = sets_option(),
+    episodes: int = episodes_option("Episodes per cell"),
     severities: str = typer.Option(
-        "0.25,0.5,1", "--severities", help="Comma-separated severities in [0, 1]."
+        "0.25,0.5,1", "--severities", metavar="S,S,...", help="Severities in [0, 1], by commas."
     ),
     perturbations: str = typer.Option(
-        None, "--perturbations", help="Comma-separated perturbation names (default: all)."
+        None,
+        "--perturbations",
+        metavar="NAME,...",
+        help="Perturbation names, by commas (default: all).",
     ),
-    seed: int = typer.Option(0, "--seed", help="Seed of the first episode of every cell."),
-    json_out: bool = typer.Option(False, "--json", help="Print the matrix as JSON only."),
-    sets: list[str] = typer.Option(None, "--set", help=SetHelp),
-    plot: Path = typer.Option(
-        None, "--plot", help="Write heatmaps (success, p95 error) to this image."
-    ),
+    seed: int = seed_option("Seed of the first episode of every cell."),
+    out: Path = out_option("the matrix as JSON"),
+    plot: Path = plot_option("heatmaps (success, p95 error)"),
+    force: bool = force_option(),
+    json_out: bool = json_option("the matrix"),
 ) -> None:
-    """Closed-loop robustness: success, localisation error and kidnap recovery per perturbation x severity."""
+    """Closed-loop robustness: success, localisation error and kidnap recovery per
+    perturbation x severity (first row: no perturbation)."""
     from lrp_gym.experiments import robustness as rb
 
     sev = _floats(severities, "--severities")
@@ -56,17 +82,44 @@ def robustness(
         if perturbations is not None
         else list(rb.PERTURBATION_NAMES)
     )
+    for n in names:
+        choice(n, rb.PERTURBATION_NAMES, "--perturbations")
+    check_agent(agent, model, task, episodes)
     rb._check(names, sev, episodes, agent)
-    if model is not None and agent != "ppo":
-        raise InputError("--model: only used with --agent ppo")
-    if task not in ("path", "goal"):
-        raise InputError(f"--task: must be 'path' or 'goal', got {task!r}")
-    if plot is not None and plot.suffix.lower() not in (".png", ".pdf", ".svg", ".jpg"):
-        raise InputError(f"--plot: use a .png, .pdf, .svg or .jpg file name, got {plot}")
+    choice(fidelity, FIDELITIES, "--fidelity")
     if seed < 0:
         raise InputError(f"--seed: must be non-negative, got {seed}")
-    overrides = parse_sets(sets, "ipin2023" if task == "path" else None)
+    out_path = check_output(out, "--out", force, (".json",))
+    plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
+    check_distinct(out_path, plot_path)
+    result = _run(
+        rb,
+        agent,
+        env,
+        names,
+        sev,
+        episodes,
+        seed,
+        task,
+        model,
+        scenario,
+        json_out,
+        overrides(scenario, sets, fidelity),
+    )
+    if plot_path is not None:
+        save_figure(rb.plot_matrix(result), plot_path)
+    if out_path is not None:
+        write_json(result, out_path)
+    if json_out:
+        print_json(result)
+    else:
+        _print(result, rb.RECOVERY_BUDGET_FRAMES)
+    for p in (out_path, plot_path):
+        if p is not None:
+            wrote(p, quiet=json_out)
 
+
+def _run(rb, agent, env, names, sev, episodes, seed, task, model, scenario, quiet, over) -> dict:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -77,7 +130,7 @@ def robustness(
         MofNCompleteColumn(),
         TimeElapsedColumn(),
         console=Console(stderr=True),
-        transient=json_out,
+        transient=quiet,
     ) as bar:
         job = bar.add_task("robustness", total=total)
         result = rb.run_matrix(
@@ -89,35 +142,30 @@ def robustness(
             seed,
             task,
             model=model,
-            overrides=overrides,
+            overrides=over,
             progress=lambda label: bar.update(job, description=f"{label:<26}"),
             on_episode=lambda: bar.advance(job),
+            scenario=scenario,
         )
-    if plot is not None:
-        save_figure(rb.plot_matrix(result), plot)
-    if json_out:
-        print_json(result)
-        return
-    from rich.table import Table
+    result["env_id"] = env or ("LRPRadarNavOracle-v0" if agent == "oracle" else "LRPRadarNav-v0")
+    result["fidelity"] = (over.get("radar") or {}).get("fidelity")
+    result["sets"] = over
+    return result
 
+
+def _print(result: dict, budget: int) -> None:
     def f(v, pct=False):
         return "-" if v is None else (f"{100 * v:.0f} %" if pct else f"{v:.3f}")
 
-    t = Table(
-        title=f"{agent} on {env} ({task}), {episodes} episodes/cell, seeds {seed}..{seed + episodes - 1}"
+    e, s = result["episodes"], result["seed"]
+    cols = ("perturbation", "sev.", "success", "coll.", "p50 [m]", "p95 [m]", "localised")
+    cols += ("recovery [frames]", f"recovered <= {budget}")
+    t = table(
+        f"{result['agent']} on {result['env_id']} ({result['scenario']}, "
+        f"{result['task'] or 'its task'}), {e} episodes/cell, seeds {s}..{s + e - 1}",
+        cols,
+        left=1,
     )
-    for col in (
-        "perturbation",
-        "severity",
-        "success",
-        "collision",
-        "p50 err m",
-        "p95 err m",
-        "localised",
-        "recovery frames",
-        f"recovered <= {rb.RECOVERY_BUDGET_FRAMES}",
-    ):
-        t.add_column(col, justify="left" if col == "perturbation" else "right")
     for c in result["cells"]:
         t.add_row(
             c["perturbation"],
@@ -131,9 +179,7 @@ def robustness(
             f(c["recovered_within_budget"], True),
         )
     console.print(t)
-    if plot is not None:
-        console.print(f"wrote {plot}")
 
 
 def register(app: typer.Typer) -> None:
-    app.command("robustness")(robustness)
+    app.command("robustness", short_help="Perturbation x severity matrix, closed loop.")(robustness)

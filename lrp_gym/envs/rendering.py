@@ -40,7 +40,7 @@ class Renderer:
             self.fig = plt.figure(figsize=(size_px / 100, size_px / 100), dpi=100)
         self.mode = mode
         self.world = world
-        self.ax = self.fig.add_axes((0.06, 0.06, 0.9, 0.88))
+        self.ax = self.fig.add_axes((0.1, 0.22, 0.86, 0.72))  # room for the legend below
 
     def draw(self, env):
         ax, world = self.ax, self.world
@@ -103,7 +103,18 @@ class Renderer:
         ax.set_title(
             f"step {env._steps}  error {err:.3f} m  dets {len(env.detections)}", fontsize=9
         )
-        ax.legend(loc="upper right", fontsize=7)
+        ax.set_xlabel("x [m]", fontsize=8)
+        ax.set_ylabel("y [m]", fontsize=8)
+        ax.tick_params(labelsize=7)
+        own = ax.get_legend_handles_labels()[0]  # the LRP types, from draw_room
+        ax.legend(
+            handles=[*own, *legend_handles()],
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.1),
+            ncol=3,
+            fontsize=6,
+            frameon=False,
+        )
         self.fig.canvas.draw()
         if self.mode == "rgb_array":
             buf = np.asarray(self.fig.canvas.buffer_rgba())
@@ -118,6 +129,20 @@ class Renderer:
             import matplotlib.pyplot as plt
 
             plt.close(self.fig)
+
+
+def legend_handles() -> list:
+    """Proxy artists for every layer draw() paints (arrows and clouds have no legend look)."""
+    from matplotlib.lines import Line2D
+
+    return [
+        Line2D([], [], marker="o", mfc="none", color="tab:green", ls="-", label="true pose"),
+        Line2D([], [], color="tab:purple", lw=1.5, label="estimate, 2-sigma ellipse"),
+        Line2D([], [], marker=".", color="tab:orange", ls="none", alpha=0.6, label="particles"),
+        Line2D([], [], color=TYPE_COLOURS[0], lw=0.8, label="tracked range circles"),
+        Line2D([], [], color="0.4", ls="--", marker=".", label="path"),
+        Line2D([], [], marker="*", color="gold", mec="k", ms=10, ls="none", label="goal"),
+    ]
 
 
 def plt_circle(centre, radius, colour):

@@ -124,6 +124,7 @@ def run_matrix(
     overrides: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
     on_episode: Callable[[], None] | None = None,
+    scenario: str | None = None,
 ) -> dict[str, Any]:
     """The whole matrix (baseline row first).
 
@@ -141,6 +142,8 @@ def run_matrix(
         Called with a label before each cell.
     on_episode : callable, optional
         Called after every episode.
+    scenario : str, optional
+        Scenario name or file; ``task`` then sets its ``task.mode`` (None: keep it).
 
     Returns
     -------
@@ -150,9 +153,12 @@ def run_matrix(
     from agents.evaluate import make_agent, make_eval_env
 
     _check(perturbations, severities, episodes, agent)
-    if task not in ("path", "goal"):
+    if task not in ("path", "goal", None) or (task is None and scenario is None):
         raise InputError(f"--task: must be 'path' or 'goal', got {task!r}")
-    scenario = "ipin2023" if task == "path" else None
+    if scenario is None:
+        scenario = "ipin2023" if task == "path" else None
+    elif task is not None:
+        overrides = deep_merge(overrides or {}, {"task": {"mode": task}})
     cells_spec = [(BASELINE, 0.0)] + [(p, s) for p in perturbations for s in severities]
     policy = None
     cells = []
@@ -170,6 +176,7 @@ def run_matrix(
     return {
         "agent": agent,
         "env_id": env_id,
+        "scenario": scenario,
         "task": task,
         "episodes": episodes,
         "seed": seed,

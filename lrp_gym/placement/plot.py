@@ -40,6 +40,8 @@ def plot_ambiguity_map(
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
+    from matplotlib.legend_handler import HandlerTuple
+    from matplotlib.lines import Line2D
     from matplotlib.patches import Rectangle
 
     fig, ax = plt.subplots(figsize=(6.4, 6.0))
@@ -49,9 +51,8 @@ def plot_ambiguity_map(
     img[img < 0] = np.nan  # unique cells: white background
     n = max(result.n_groups, 1)
     base = plt.get_cmap("tab20")(np.arange(20) % 20)
-    cmap = ListedColormap(base[np.arange(n) % 20])
-    cmap.set_bad("white")
-    ax.imshow(
+    cmap = ListedColormap(base[np.arange(n) % 20]).with_extremes(bad="white")
+    im = ax.imshow(
         np.ma.masked_invalid(img),
         origin="lower",
         extent=grid.extent(),
@@ -92,6 +93,7 @@ def plot_ambiguity_map(
                 str(k), (x, y), textcoords="offset points", xytext=(3, 3), fontsize=7, zorder=6
             )
     refl = np.asarray(reflectors_m, dtype=float)
+    handles, labels = _area_legend(result, cmap, excluded.any(), path_xy_m is not None)
     for t, name in enumerate(type_names):
         sel = np.asarray(type_index) == t
         if sel.any():
@@ -107,6 +109,23 @@ def plot_ambiguity_map(
                 label=f"LRP type {name}",
             )
             ax.scatter(refl[sel, 0], refl[sel, 1], marker="x", s=40, color="k", zorder=8)
+            # The legend shows the same marker as the map: white shape with a black x.
+            handles.append(
+                (
+                    Line2D(
+                        [],
+                        [],
+                        marker=_MARKERS[t % len(_MARKERS)],
+                        ls="none",
+                        ms=9,
+                        mfc="white",
+                        mec="k",
+                        mew=1.8,
+                    ),
+                    Line2D([], [], marker="x", ls="none", ms=6, color="k"),
+                )
+            )
+            labels.append(f"LRP type {name}")
     ax.set_xlim(-0.05 * lx, 1.05 * lx)
     ax.set_ylim(-0.05 * ly, 1.05 * ly)
     ax.set_aspect("equal")
@@ -119,8 +138,42 @@ def plot_ambiguity_map(
         f"random {100 * result.random_fraction:.1f} %)",
         fontsize=10,
     )
-    ax.legend(loc="upper right", fontsize=8, framealpha=0.9)
+    ax.legend(
+        handles,
+        labels,
+        handler_map={tuple: HandlerTuple(ndivide=1)},
+        loc="upper left",
+        bbox_to_anchor=(1.02, 1.0),
+        fontsize=8,
+        frameon=False,
+    )
+    if result.n_groups:
+        bar = fig.colorbar(im, ax=ax, fraction=0.04, pad=0.1, location="bottom", aspect=40)
+        bar.set_label(
+            f"ambiguity group: cells of one colour share a fingerprint ({result.n_groups} groups)",
+            fontsize=8,
+        )
+        bar.set_ticks([])
     return fig
+
+
+def _area_legend(result: AmbiguityResult, cmap, excluded: bool, path: bool):
+    """Legend entries for the map's areas (the LRP markers are added by the caller)."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    handles: list = [Patch(facecolor="white", edgecolor="0.5")]
+    labels = ["unique fingerprint"]
+    if result.n_groups:
+        handles.append(Patch(color=cmap(0)))
+        labels.append("ambiguous (colour = group, bar below)")
+    if excluded:
+        handles.append(Patch(facecolor="0.85"))
+        labels.append("not analysed (obstacle, wall clearance)")
+    if path:
+        handles.append(Line2D([], [], color="k", marker="o", ms=3, lw=1.2))
+        labels.append("task path (numbered waypoints)")
+    return handles, labels
 
 
 def plot_scenario_map(cfg, result: AmbiguityResult, title: str = ""):

@@ -34,6 +34,8 @@ class DetectionRate:
     mean_detections : float
         Detections per frame.
     n_poses, n_lrps : int
+    per_lrp_rate : tuple of float
+        ``rate`` of each LRP, in layout order.
     """
 
     rate: float
@@ -43,6 +45,7 @@ class DetectionRate:
     mean_detections: float
     n_poses: int
     n_lrps: int
+    per_lrp_rate: tuple[float, ...] = ()
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -123,4 +126,5 @@ def lrp_detection_rate(
         mean_detections=float(np.mean(counts)),
         n_poses=int(n_poses),
         n_lrps=len(lay),
+        per_lrp_rate=tuple(float(r) for r in np.reshape(ok, (n_poses, len(lay))).mean(axis=0)),
     )

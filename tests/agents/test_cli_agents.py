@@ -99,8 +99,8 @@ def test_evaluate_task_overrides_the_scenario_mode(capsys, monkeypatch):
 
     monkeypatch.setattr(ev, "make_eval_env", spy)
     for task in ("path", "goal"):
-        args = ["evaluate", "--agent", "random", "--env", "LRPRadarNavFast-v0"]
-        args += ["--scenario", "ipin2023-2types", "--task", task, "--episodes", "1", "--json"]
+        args = ["evaluate", "ipin2023-2types", "--agent", "random", "--fidelity", "detections"]
+        args += ["--task", task, "--episodes", "1", "--json"]
         code, out, _ = run_cli(capsys, *args)
         assert code == 0 and json.loads(out)["task"] == task
     path_env, goal_env = (e.unwrapped for e in made)

@@ -37,6 +37,8 @@ def test_tiny_matrix_end_to_end_via_cli(capsys, tmp_path):
         main(
             [
                 "robustness",
+                "--fidelity",
+                "detections",
                 "--episodes",
                 "1",
                 "--severities",

@@ -1,0 +1,301 @@
+"""The README's results table: one row per command whose JSON is kept in docs/results.
+
+Each row names the ``lrp-gym`` arguments that print its JSON (``--json``), how to state the
+measured value, and, when it has a target, the comparison that decides "missed". Rows without
+a stored JSON keep their typed text, marked "(not regenerated)".
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from lrp_gym.config import CONFIGS_DIR
+
+ROOT = CONFIGS_DIR.parent
+RESULTS_DIR = ROOT / "docs" / "results"
+README = ROOT / "README.md"
+START, END = "<!-- results:start (lrp-gym report) -->", "<!-- results:end -->"
+
+Data = dict[str, Any]  # key -> the row's stored JSON (its "result")
+
+
+@dataclass(frozen=True)
+class Row:
+    """One line of the table; ``argv`` None means the row is not rerun by ``lrp-gym report``."""
+
+    key: str
+    what: str
+    target: str
+    argv: tuple[str, ...] | None
+    measured: Callable[[Any, Data], str] | None = None
+    met: Callable[[Any, Data], bool] | None = None
+    typed: str = ""
+    command: str = ""
+
+    @property
+    def shown_command(self) -> str:
+        return self.command or "lrp-gym " + " ".join(self.argv or ())
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.0f} %"
+
+
+def _eval(r: Any, _: Data) -> str:
+    return (
+        f"{_pct(r['success_rate'])} success, {_pct(r['collision_rate'])} collisions; loc. error "
+        f"mean {r['mean_loc_error_m']:.3f} m, p95 {r['p95_loc_error_m']:.3f} m"
+    )
+
+
+def _repro(r: Any, _: Data) -> str:
+    conv = r["amcl"]["converged_after"]
+    return (
+        f"AMCL {r['amcl']['mean_error_m']:.3f} m, converged at position "
+        f"{conv if conv is not None else 'never'} (paper: 0.097 m, 6); look-up table "
+        f"{r['lut']['mean_error_m']:.2f} m, {r['lut']['entries']} entries (paper: 6574)"
+    )
+
+
+def _repro_met(limit_m: float) -> Callable[[Any, Data], bool]:
+    def met(r: Any, _: Data) -> bool:
+        conv = r["amcl"]["converged_after"]
+        return r["amcl"]["mean_error_m"] <= limit_m and conv is not None and conv <= 4
+
+    return met
+
+
+def _cell(r: Any, name: str) -> dict:
+    return next(c for c in r["cells"] if c["perturbation"] == name)
+
+
+def _cells(r: Any, key: str, names: tuple[tuple[str, float], ...]) -> list[float]:
+    return [
+        next(c[key] for c in r["cells"] if (c["perturbation"], c["severity"]) == n) for n in names
+    ]
+
+
+ROBUST = (("shadowing", 0.25), ("missed_detections", 0.2))
+KIDNAP = (("kidnapping", 0.5), ("kidnapping", 1.0))
+DET = ("--fidelity", "detections")
+
+ROWS: tuple[Row, ...] = (
+    Row(
+        "radar_rate",
+        "LRPs delivered by the signal chain (within 10 cm, RCS in window), paper room, noise on",
+        "-",
+        ("radar-rate", "--poses", "500", "--seed", "0"),
+        lambda r, _: (
+            f"{100 * r['rate']:.1f} % (median RCS error {r['median_rcs_error_db']:+.1f} dB, "
+            f"range std {100 * r['range_error_std_m']:.1f} cm)"
+        ),
+        typed="94.8 % (median RCS error -0.8 dB, range std 2.6 cm)",
+    ),
+    Row(
+        "reproduce_noise_off",
+        "paper path, 15 positions, noise off (10 runs)",
+        "AMCL <= 0.05 m, converged <= 4",
+        ("reproduce-paper", "--runs", "10", "--no-noise"),
+        _repro,
+        _repro_met(0.05),
+        typed="AMCL 0.095 m, converged at position 6 (missed)",
+    ),
+    Row(
+        "reproduce_noise_on",
+        "paper path, 15 positions, noise on (10 runs)",
+        "AMCL <= 0.10 m, converged <= 4",
+        ("reproduce-paper", "--runs", "10", "--noise"),
+        _repro,
+        _repro_met(0.10),
+        typed="AMCL 0.084 m, converged at position 5 (missed)",
+    ),
+    Row(
+        "reproduce_best_k",
+        "same with the paper's estimator rule (20 best particles), noise on",
+        "-",
+        ("reproduce-paper", "--runs", "10", "--noise", "--estimator", "best_k"),
+        _repro,
+        typed="AMCL 0.235 m; 0.053 m from position 3",
+    ),
+    Row(
+        "track_seed0",
+        "tracked fingerprint vs truth on the paper path, 15 frames, seed 0",
+        "-",
+        ("track", "--seed", "0"),
+        lambda r, _: (
+            f"tracked RMSE {r['tracked_rmse_m']:.3f} m (raw detections {r['raw_rmse_m']:.3f} m), "
+            f"swaps: {r['swaps']}; seeds 0-4: see [docs/tracking.md](docs/tracking.md)"
+        ),
+        typed="0.086 m over seeds 0-4 (0.076-0.129), 1-6 swaps",
+    ),
+    Row(
+        "layout_random",
+        "layout search, 500 candidates",
+        "<= 20 s",
+        ("layout", "--candidates", "500", "--seed", "0"),
+        lambda r, _: f"{r['search_s']:.1f} s; ambiguous {100 * r['ambiguous_fraction']:.1f} %",
+        lambda r, _: r["search_s"] <= 20.0,
+        typed="4.0-4.4 s",
+    ),
+    Row(
+        "placement_methods",
+        "ambiguous area: random search vs differential evolution (5 seeds)",
+        "optimiser wins",
+        None,
+        typed="13.4 % vs 9.0 %",
+        command="see [docs/placement.md](docs/placement.md)",
+    ),
+    Row(
+        "pp_path",
+        "pure pursuit on the paper path (`LRPRadarNav-v0`, 20 episodes)",
+        "100 %, p95 loc. error <= 0.10 m",
+        ("evaluate", "--agent", "pure-pursuit", "--episodes", "20", "--seed", "0"),
+        _eval,
+        lambda r, _: r["success_rate"] >= 1.0 and r["p95_loc_error_m"] <= 0.10,
+        typed="100 %, mean 0.041 m, p95 0.095 m",
+    ),
+    Row(
+        "pp_goal",
+        "pure pursuit, sampled goals (`LRPRadarNav-v0`, 50 episodes)",
+        "-",
+        (
+            "evaluate",
+            "--agent",
+            "pure-pursuit",
+            "--task",
+            "goal",
+            "--episodes",
+            "50",
+            "--seed",
+            "1000",
+        ),
+        _eval,
+        typed="92 % success, 4 % collisions; loc. error mean 1.83 m, p95 5.4 m",
+    ),
+    Row(
+        "ppo_goal",
+        "shipped PPO, sampled goals (`LRPRadarNav-v0`, same 50 seeds)",
+        ">= 90 %, within 10 points of PP",
+        ("evaluate", "--agent", "ppo", "--task", "goal", "--episodes", "50", "--seed", "1000"),
+        _eval,
+        lambda r, d: (
+            r["success_rate"] >= 0.9
+            and ("pp_goal" not in d or r["success_rate"] >= d["pp_goal"]["success_rate"] - 0.1)
+        ),
+        typed="94 % success (PP: 92 %); loc. error mean 0.23 m",
+    ),
+    Row(
+        "ppo_training",
+        "PPO training wall time",
+        "<= 30 min",
+        None,
+        typed="19.6 min for 300k steps (2 subprocess envs)",
+        command="lrp-gym train --config configs/ppo.yaml --out runs/ppo-main --seed 0 --export agents/models",
+    ),
+    Row(
+        "bench_radar",
+        "radar signal chain (channel + cube + FFT + CFAR), one core",
+        ">= 1000 frames/s",
+        None,
+        typed="935-1037 frames/s over two runs; detections fidelity 1850 (missed on one run)",
+        command="lrp-gym bench -c radar",
+    ),
+    Row(
+        "bench_amcl",
+        "AMCL update, 10000 particles / converged count",
+        "<= 1.5 / 0.3 ms",
+        None,
+        typed="3.6 / 1.3 ms (missed; 1.1 / 0.42 ms without the structure term)",
+        command="lrp-gym bench -c amcl",
+    ),
+    Row(
+        "bench_env",
+        "`LRPRadarNav-v0` / `LRPRadarNavFast-v0` steps/s (converged)",
+        ">= 500 / 3000",
+        None,
+        typed="440 / 510-520 (missed)",
+        command="lrp-gym bench -c env",
+    ),
+    Row(
+        "robustness_shadowing_missed",
+        "robustness: shadowing 10 frames / 20 % missed detections, PP success (paper path, "
+        "detections fidelity, 20 episodes)",
+        ">= 95 %",
+        (
+            "robustness",
+            *DET,
+            "--episodes",
+            "20",
+            "--perturbations",
+            "shadowing,missed_detections",
+            "--severities",
+            "0.25,0.2",
+        ),
+        lambda r, _: " / ".join(_pct(v) for v in _cells(r, "success_rate", ROBUST)),
+        lambda r, _: min(_cells(r, "success_rate", ROBUST)) >= 0.95,
+        typed="100 % / 75 % (missed)",
+    ),
+    Row(
+        "robustness_kidnapping",
+        "kidnapping: recovered (< 0.2 m) within 15 frames, jump >= 1.5 m / >= 3 m (oracle "
+        "driver, detections fidelity, 20 episodes)",
+        ">= 90 %",
+        (
+            "robustness",
+            "--agent",
+            "oracle",
+            *DET,
+            "--episodes",
+            "20",
+            "--perturbations",
+            "kidnapping",
+            "--severities",
+            "0.5,1",
+        ),
+        lambda r, _: " / ".join(_pct(v) for v in _cells(r, "recovered_within_budget", KIDNAP)),
+        lambda r, _: min(_cells(r, "recovered_within_budget", KIDNAP)) >= 0.9,
+        typed="55 % / 60 % (missed)",
+    ),
+)
+
+
+def load_results(directory: Path = RESULTS_DIR) -> Data:
+    """The stored ``result`` of every row that has a JSON file."""
+    out: Data = {}
+    for row in ROWS:
+        f = directory / f"{row.key}.json"
+        if f.is_file():
+            out[row.key] = json.loads(f.read_text(encoding="utf-8"))["result"]
+    return out
+
+
+def render_row(row: Row, data: Data) -> str:
+    """One markdown line; 'missed' and 'not regenerated' come from here only."""
+    if row.key in data and row.measured is not None:
+        text = row.measured(data[row.key], data)
+        if row.met is not None and not row.met(data[row.key], data):
+            text += " (missed)"
+    else:
+        text = f"{row.typed} (not regenerated)"
+    cmd = row.shown_command
+    cmd = cmd if cmd.startswith("see ") else f"`{cmd}`"
+    return f"| {row.what} | {row.target} | {text} | {cmd} |"
+
+
+def render_table(data: Data) -> str:
+    """The whole table (header and rows)."""
+    lines = ["| what | target | measured | command |", "|---|---|---|---|"]
+    return "\n".join(lines + [render_row(r, data) for r in ROWS])
+
+
+def replace_table(readme: str, table: str) -> str:
+    """``readme`` with the text between the markers replaced by ``table``."""
+    head, sep, rest = readme.partition(START)
+    _, sep2, tail = rest.partition(END)
+    if not (sep and sep2):
+        raise ValueError(f"README.md lacks the markers {START} ... {END}")
+    return f"{head}{START}\n{table}\n{END}{tail}"
