@@ -98,6 +98,7 @@ class Amcl:
 
     # ------------------------------------------------------------------ sampling
     def _free(self, xy: np.ndarray) -> np.ndarray:
+        """Whether floor positions (N, 2) are free for the robot (pass ``particles[:, :2]``)."""
         if self._simple_room:
             c = self.clearance_m
             return (
@@ -167,7 +168,7 @@ class Amcl:
             raise RuntimeError("call reset() before update()")
         cfg = self.cfg
         self.particles = sample_motion(self.particles, odometry, self.motion_noise, rng)
-        w = self.weights * self._free(self.particles)
+        w = self.weights * self._free(self.particles[:, :2])
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
             if recovery:

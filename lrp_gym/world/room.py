@@ -87,11 +87,15 @@ class Room:
     def free(self, xy: np.ndarray, clearance_m: float = 0.0) -> np.ndarray:
         """Whether floor positions (..., 2) are free for a robot disc of radius ``clearance_m``.
 
-        A position is free when it is inside the room at least ``clearance_m`` from each wall
+        Only 2-D points are accepted: poses (..., 3) must be sliced to ``[..., :2]`` by the
+        caller, since their heading would otherwise be compared with the room's height. A position is free when it is inside the room at least ``clearance_m`` from each wall
         and at least ``clearance_m`` from every obstacle's footprint (obstacles of any height
         block the robot).
         """
         xy = np.asarray(xy, dtype=float)
+        if xy.ndim == 0 or xy.shape[-1] != 2:
+            # A pose (x, y, theta) is not a floor position: pass ``poses[..., :2]``.
+            raise ValueError(f"Room.free expects floor positions of shape (..., 2), got {xy.shape}")
         ok = self.inside(xy, clearance_m)
         if self.obstacles:
             lo, hi = self.obstacle_bounds
