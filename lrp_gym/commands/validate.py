@@ -6,7 +6,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from lrp_gym.commands._common import ScenarioArg, console, print_json
+from lrp_gym.commands._common import ScenarioArg, SetHelp, console, parse_sets, print_json
 from lrp_gym.config import load_scenario
 from lrp_gym.world import World
 
@@ -14,12 +14,13 @@ from lrp_gym.world import World
 def validate(
     scenario: str = typer.Argument(..., help=ScenarioArg),
     json_out: bool = typer.Option(False, "--json", help="Print the derived numbers as JSON."),
+    sets: list[str] = typer.Option(None, "--set", help=SetHelp),
 ) -> None:
     """Validate SCENARIO and print the room, the reflectors and the derived radar numbers.
 
     Invalid scenarios print one line per problem, naming the field, and exit with code 2.
     """
-    cfg = load_scenario(scenario)
+    cfg = load_scenario(scenario).with_overrides(parse_sets(sets, scenario))
     world = World.from_config(cfg)
     fm = world.fmcw
     if json_out:
