@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lrp_gym.config import LocalizationConfig
+from lrp_gym.config import LocalizationConfig, ScenarioError
 from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.localization.estimators import (
     best_k_mean,
@@ -118,7 +118,12 @@ class Amcl:
             cand = rng.random((max(2 * (n - len(out)), 16), 2)) * self._size_xy
             out = np.concatenate([out, cand[self._free(cand)]])
         if len(out) < n:
-            raise ValueError("the room has (almost) no free space for the robot")
+            raise ScenarioError(
+                [
+                    f"robot.radius_m: a robot of radius {self.clearance_m:g} m finds (almost) no "
+                    "free space between the walls and room.obstacles"
+                ]
+            )
         th = rng.uniform(-np.pi, np.pi, n)
         return np.column_stack([out[:n], th])
 

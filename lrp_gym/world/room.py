@@ -121,7 +121,12 @@ class Room:
         ndarray of bool, shape (K - 1,)
         """
         wp = np.asarray(waypoints_xy, dtype=float).reshape(-1, 2)
-        a, b = wp[:-1], wp[1:]
+        return self.legs_free(wp[:-1], wp[1:], clearance_m)
+
+    def legs_free(self, a: np.ndarray, b: np.ndarray, clearance_m: float = 0.0) -> np.ndarray:
+        """Whether floor segments a-b (N, 2) keep a disc of radius ``clearance_m`` free; (N,)."""
+        a = np.asarray(a, dtype=float).reshape(-1, 2)
+        b = np.asarray(b, dtype=float).reshape(-1, 2)
         # The room is convex: a leg inside it (with margin) iff both ends are.
         ok = self.inside(a, clearance_m) & self.inside(b, clearance_m)
         for box in self.obstacles:
