@@ -125,7 +125,7 @@ def _robot_problems(cfg: ScenarioConfig, room) -> Iterator[str]:
     sx, sy, _ = cfg.robot.start_pose
     if not bool(room.free(np.array([sx, sy]), radius)):
         yield (
-            f"robot.start_pose: a robot of radius {_fmt(radius)} m at {_fmt([sx, sy])} "
+            f"robot.start_pose: the robot (robot.radius_m {_fmt(radius)} m) at {_fmt([sx, sy])} "
             "overlaps a wall or an obstacle (or is outside the room)"
         )
     # Collisions are checked env.substeps times per frame: between two checks the robot must
@@ -143,12 +143,14 @@ def _task_problems(cfg: ScenarioConfig, room) -> Iterator[str]:
     task = cfg.task
     radius = cfg.robot.radius_m
     path = np.asarray(task.path, dtype=float).reshape(-1, 2)
-    for i, wp in enumerate(path):
-        if not bool(room.free(wp, radius)):
-            yield (
-                f"task.path[{i}]: a robot of radius {_fmt(radius)} m at waypoint {_fmt(list(wp))} "
-                "overlaps a wall or an obstacle (or is outside the room)"
-            )
+    blocked = np.flatnonzero(~room.free(path, radius))
+    for i in blocked[:3]:
+        yield (
+            f"task.path[{i}]: the robot (robot.radius_m {_fmt(radius)} m) at waypoint "
+            f"{_fmt(list(path[i]))} overlaps a wall or an obstacle (or is outside the room)"
+        )
+    if len(blocked) > 3:
+        yield f"task.path: {len(blocked) - 3} more waypoints overlap a wall or an obstacle"
     if len(path) and len(np.unique(path, axis=0)) < 2:
         yield "task.path: needs at least two distinct waypoints"
     elif len(path) >= 2:
@@ -157,7 +159,7 @@ def _task_problems(cfg: ScenarioConfig, room) -> Iterator[str]:
         for i in np.flatnonzero(~legs & ends_free[:-1] & ends_free[1:]):
             yield (
                 f"task.path[{i}]..[{i + 1}]: the leg {_fmt(list(path[i]))} -> "
-                f"{_fmt(list(path[i + 1]))} passes within the robot radius {_fmt(radius)} m "
+                f"{_fmt(list(path[i + 1]))} passes within robot.radius_m ({_fmt(radius)} m) "
                 "of an obstacle"
             )
     g = task.goal
