@@ -15,7 +15,7 @@ from lrp_gym.commands._common import (
     save_figure,
     write_json,
 )
-from lrp_gym.config import load_scenario
+from lrp_gym.config import deep_merge, load_scenario
 from lrp_gym.errors import InputError
 from lrp_gym.experiments.reproduce import PAPER, Reproduction, reproduce
 
@@ -70,6 +70,12 @@ def reproduce_paper(
     ),
     plot_path: str | None = typer.Option(None, "--plot", help="Save the error figure here."),
     sets: list[str] = typer.Option(None, "--set", help=SetHelp),
+    random_rooms: int = typer.Option(
+        0,
+        "--random-rooms",
+        help="Instead of the scenario: AMCL on N generated rooms (room seeds 0..N-1), with the "
+        "radar chain and with true fingerprints (see docs/scenarios.md).",
+    ),
 ) -> None:
     """Run the full chain (radar, CFAR, tracking, look-up table, AMCL) along the scenario's path
     and compare the per-position errors with the paper's."""
@@ -83,14 +89,20 @@ def reproduce_paper(
         raise InputError(f"--estimator: expected cluster or best_k, got {estimator!r}")
     if particles is not None and particles < 10:
         raise InputError(f"--particles: must be at least 10, got {particles}")
+    if random_rooms < 0:
+        raise InputError(f"--random-rooms: must not be negative, got {random_rooms}")
+    if random_rooms:
+        if fingerprints != "radar" or plot_path:
+            raise InputError("--random-rooms: runs both fingerprint kinds and draws no --plot")
+        over = deep_merge(parse_sets(sets, scenario), {"radar": {"noise": noise == "on"}})
+        if particles is not None:
+            over = deep_merge(over, _particles(particles, 200))
+        _random_rooms(random_rooms, runs, seed, over, estimator, json_path)
+        return
     cfg = load_scenario(scenario).with_overrides(parse_sets(sets, scenario))
     over: dict = {"radar": {"noise": noise == "on"}}
     if particles is not None:
-        over["localization"] = {
-            "initial_particles": particles,
-            "max_particles": particles,
-            "min_particles": min(cfg.localization.min_particles, particles),
-        }
+        over.update(_particles(particles, cfg.localization.min_particles))
     cfg = cfg.with_overrides(over)
     if len(cfg.task.path) < 2:
         raise InputError(f"--scenario: {cfg.name} has no path (task.path needs 2+ waypoints)")
@@ -139,6 +151,59 @@ def reproduce_paper(
         write_json(data, json_path)
     if plot_path:
         save_figure(plot_errors(result, f"{cfg.name}, noise {noise}"), plot_path)
+
+
+def _particles(n: int, min_particles: int) -> dict:
+    """Overrides for ``--particles``: N0 and the maximum, the minimum no larger."""
+    return {
+        "localization": {
+            "initial_particles": n,
+            "max_particles": n,
+            "min_particles": min(min_particles, n),
+        }
+    }
+
+
+def _random_rooms(
+    n: int, runs: int, seed: int, over: dict, estimator: str, json_path: str | None
+) -> None:
+    """``--random-rooms``: the generated-room baseline, one line per room as it finishes."""
+    from lrp_gym.experiments.rooms import summary, sweep
+
+    def progress(r) -> None:
+        err_console.print(
+            f"room {r.seed}: {r.size_m[0]:.1f} x {r.size_m[1]:.1f} m, {r.obstacles} obstacles, "
+            f"{r.reflectors} reflectors ({r.kinds}), {r.frames} frames: AMCL "
+            f"{r.amcl_radar_m:.3f} m (true fingerprints {r.amcl_true_m:.3f} m)",
+            highlight=False,
+        )
+
+    results = sweep(
+        range(n), runs=runs, run_seed=seed, overrides=over, estimator=estimator, progress=progress
+    )
+    data = summary(results)
+    table = Table(title=f"AMCL mean error (m) on {n} generated rooms ({runs} runs each)")
+    for col in ("room", "size (m)", "obst.", "refl.", "kinds", "frames", "radar", "true fp"):
+        table.add_column(col, justify="right")
+    for r in results:
+        table.add_row(
+            str(r.seed),
+            f"{r.size_m[0]:.1f} x {r.size_m[1]:.1f} x {r.size_m[2]:.1f}",
+            str(r.obstacles),
+            str(r.reflectors),
+            r.kinds,
+            str(r.frames),
+            f"{r.amcl_radar_m:.3f}",
+            f"{r.amcl_true_m:.3f}",
+        )
+    console.print(table)
+    console.print(
+        f"median AMCL mean error: {data['median_amcl_radar_m']:.3f} m with the radar chain, "
+        f"{data['median_amcl_true_m']:.3f} m with true fingerprints",
+        highlight=False,
+    )
+    if json_path:
+        write_json(data, json_path)
 
 
 def register(app: typer.Typer) -> None:
