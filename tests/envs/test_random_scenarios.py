@@ -81,3 +81,31 @@ def test_every_small_generated_scenario_runs_the_whole_chain(seed):
 @pytest.mark.parametrize("seed", range(40))
 def test_generated_scenarios_sweep(seed):
     run_chain(random_scenario(np.random.default_rng(seed)), seed, steps=3)
+
+
+def test_room_sweep_records_both_fingerprint_kinds():
+    from lrp_gym.experiments.rooms import summary, sweep
+
+    seen = []
+    results = sweep([4], small=True, progress=seen.append)
+    assert seen == results and results[0].seed == 4
+    r = results[0]
+    cfg = random_scenario(np.random.default_rng(4), small=True)
+    assert r.size_m == tuple(round(v, 2) for v in cfg.room.size) and r.frames >= 2
+    assert np.isfinite(r.amcl_radar_m) and np.isfinite(r.amcl_true_m)
+    assert summary(results)["median_amcl_true_m"] == r.amcl_true_m
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--random-rooms", "-1"], "--random-rooms"),
+        (["--random-rooms", "2", "--plot", "x.png"], "--plot"),
+    ],
+)
+def test_random_rooms_option_is_checked(args, message, capsys):
+    from lrp_gym.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce-paper", *args])
+    assert exc.value.code == 2 and message in capsys.readouterr().err
