@@ -8,10 +8,10 @@ naming its field, as a :class:`ScenarioError`.
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-import numpy as np
 import yaml
 from pydantic import (
     BaseModel,
@@ -469,6 +469,8 @@ class PlacementConfig(Strict):
 
 # --------------------------------------------------------------------------- task
 class GoalTaskConfig(Strict):
+    """Sampled goal tasks: start-to-goal distance bounds (checked against the room)."""
+
     min_distance_m: PositiveFloat = 1.0
     max_distance_m: PositiveFloat = 4.0
     waypoint_spacing_m: PositiveFloat = 0.5
@@ -481,11 +483,30 @@ class RewardConfig(Strict):
     goal: NonNegFloat = 5.0
 
 
+#: Observation types shipped in ``lrp_gym.envs.observations`` (more may be registered there).
+OBSERVATION_TYPES = ("estimated", "oracle", "dict")
+
+
 class ObservationConfig(Strict):
     """Which observation type the env builds (see ``lrp_gym.envs.observations``)."""
 
     type: str = "estimated"
     n_waypoints: Annotated[int, Field(ge=1, le=20)] = 3
+
+    @field_validator("type")
+    @classmethod
+    def _registered(cls, v: str) -> str:
+        # The registry is consulted only once loaded (it imports this module); user types are
+        # registered there before a scenario names them.
+        obs = sys.modules.get("lrp_gym.envs.observations")
+        known = sorted(set(OBSERVATION_TYPES) | set(getattr(obs, "OBSERVATION_TYPES", {})))
+        if v not in known:
+            raise PydanticCustomError(
+                "choice",
+                "unknown observation type {v}; known: {known}",
+                {"v": repr(v), "known": ", ".join(known)},
+            )
+        return v
 
 
 class EnvConfig(Strict):
@@ -617,7 +638,9 @@ class ScenarioConfig(Strict):
 
     @model_validator(mode="after")
     def _cross_checks(self) -> ScenarioConfig:
-        problems = list(_cross_problems(self))
+        from lrp_gym.config_checks import cross_problems
+
+        problems = list(cross_problems(self))
         if problems:
             raise PydanticCustomError("cross", "\n".join(problems), {})
         return self
@@ -658,63 +681,6 @@ def deep_merge(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any
     return out
 
 
-def _cross_problems(cfg: ScenarioConfig):
-    size = np.asarray(cfg.room.size)
-    boxes = [(np.asarray(b.min), np.asarray(b.max)) for b in cfg.room.obstacles]
-
-    def in_box(p, lo, hi):
-        return bool(np.all(p >= lo[: len(p)]) and np.all(p <= hi[: len(p)]))
-
-    for i, b in enumerate(cfg.room.obstacles):
-        if np.any(np.asarray(b.min) < 0) or np.any(np.asarray(b.max) > size):
-            yield f"room.obstacles[{i}]: box {_fmt(b.min)}..{_fmt(b.max)} is not inside the room {_fmt(cfg.room.size)}"
-    if not cfg.reflectors.layout:
-        yield "reflectors.layout: at least one reflector is needed"
-    for i, r in enumerate(cfg.reflectors.layout):
-        p = np.asarray(r.position)
-        if np.any(p < 0) or np.any(p > size):
-            yield f"reflectors.layout[{i}].position: {_fmt(r.position)} is outside the room {_fmt(cfg.room.size)}"
-        elif any(in_box(p, lo, hi) for lo, hi in boxes):
-            yield f"reflectors.layout[{i}].position: {_fmt(r.position)} is inside an obstacle"
-        if r.axis is not None and np.linalg.norm(r.axis) == 0:
-            yield f"reflectors.layout[{i}].axis: must not be the zero vector"
-    radius = cfg.robot.radius_m
-
-    def free(xy) -> bool:
-        xy = np.asarray(xy)
-        if np.any(xy < 0) or np.any(xy > size[:2]):
-            return False
-        return not any(in_box(xy, lo, hi) for lo, hi in boxes)
-
-    sx, sy, _ = cfg.robot.start_pose
-    if not free([sx, sy]):
-        yield f"robot.start_pose: position {_fmt([sx, sy])} is not in the free space of the room"
-    for i, wp in enumerate(cfg.task.path):
-        if not free(wp):
-            yield f"task.path[{i}]: waypoint {_fmt(wp)} is outside the room or inside an obstacle"
-    if cfg.radar.mount_height_m >= size[2]:
-        yield f"radar.mount_height_m: {_fmt(cfg.radar.mount_height_m)} is not below the ceiling at {_fmt(size[2])}"
-    fm = cfg.radar.fmcw()
-    diag = float(np.linalg.norm(size))
-    if fm.max_range_m < diag:
-        yield (
-            f"radar: maximum range {fm.max_range_m:.3f} m does not cover the room diagonal "
-            f"{diag:.3f} m (raise samples_per_chirp or lower bandwidth_hz)"
-        )
-    req = cfg.radar.requirements
-    if req is not None:
-        if fm.range_resolution_m > req.range_resolution_m * (1 + 1e-9):
-            yield "radar.requirements.range_resolution_m: not met by the waveform"
-    max_speed = cfg.robot.max_speed_mps
-    if fm.max_velocity_mps < max_speed:
-        yield (
-            f"radar: unambiguous velocity {fm.max_velocity_mps:.3f} m/s is below robot.max_speed_mps "
-            f"{_fmt(max_speed)} (raise chirps or shorten chirp_period_s)"
-        )
-    if radius > 0 and 2 * radius >= min(size[:2]):
-        yield f"robot.radius_m: {_fmt(radius)} does not fit in the room"
-
-
 def format_errors(exc: ValidationError) -> list[str]:
     """One ``field.path: message`` line per validation problem."""
     problems: list[str] = []
@@ -729,7 +695,10 @@ def format_errors(exc: ValidationError) -> list[str]:
             msg = "required field is missing"
         elif err["type"] == "literal_error":
             msg = f"{msg}, got {_fmt(err.get('input'))}"
-        elif err["type"] not in {"vector", "box", "reflector", "cells", "cross"} and "input" in err:
+        elif (
+            err["type"] not in {"vector", "box", "reflector", "cells", "cross", "choice"}
+            and "input" in err
+        ):
             got = err["input"]
             if not isinstance(got, (dict, list)):
                 msg = f"{msg}, got {_fmt(got)}"
@@ -765,12 +734,66 @@ def load_scenario(source: str | Path | dict[str, Any] | ScenarioConfig) -> Scena
         raise ScenarioError([f"file not found: {path}"], str(path))
     if path.is_dir():
         raise ScenarioError([f"expected a YAML file, got a directory: {path}"], str(path))
+    if not path.is_file():  # a FIFO or device would block or never end
+        raise ScenarioError(
+            [f"expected a regular YAML file, got a special file: {path}"], str(path)
+        )
     try:
-        text = path.read_text(encoding="utf-8")
-        data = yaml.safe_load(text)
+        data = load_yaml(path.read_text(encoding="utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError, OSError) as exc:
         raise ScenarioError([f"cannot read YAML: {exc}".replace("\n", " ")], str(path)) from None
+    except ValueError as exc:
+        raise ScenarioError([f"cannot read YAML: {exc}"], str(path)) from None
     return ScenarioConfig.from_dict(data, str(path))
+
+
+#: Deepest nesting of mappings and lists a scenario may have (the schema needs 5).
+MAX_YAML_DEPTH = 32
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """A SafeLoader that rejects a mapping key given twice (PyYAML keeps the last one)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen: set = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if isinstance(key, (str, int, float, bool)) or key is None:
+                if key in seen:
+                    raise yaml.constructor.ConstructorError(
+                        "while constructing a mapping",
+                        node.start_mark,
+                        f"found duplicate key {key!r}",
+                        key_node.start_mark,
+                    )
+                seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+def _depth_ok(text: str) -> None:
+    """Refuse nesting deeper than :data:`MAX_YAML_DEPTH` before the recursive parser sees it."""
+    depth = 0
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+            depth += 1
+            if depth > MAX_YAML_DEPTH:
+                raise ValueError(f"nested deeper than {MAX_YAML_DEPTH} levels")
+        elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+            depth -= 1
+
+
+def load_yaml(text: str) -> Any:
+    """Parse scenario YAML safely: no duplicate keys, bounded nesting.
+
+    Raises
+    ------
+    yaml.YAMLError
+        Malformed YAML or a duplicate key.
+    ValueError
+        Nesting deeper than :data:`MAX_YAML_DEPTH`.
+    """
+    _depth_ok(text)
+    return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
 
 
 def save_scenario(cfg: ScenarioConfig, path: str | Path, header: str = "") -> Path:

@@ -163,7 +163,7 @@ def parse_sets(values: list[str] | None, scenario: str | None = None) -> dict[st
     """
     import yaml
 
-    from lrp_gym.config import deep_merge, load_scenario
+    from lrp_gym.config import MAX_YAML_DEPTH, deep_merge, load_scenario, load_yaml
 
     out: dict[str, Any] = {}
     for item in values or []:
@@ -171,9 +171,11 @@ def parse_sets(values: list[str] | None, scenario: str | None = None) -> dict[st
         path = key.strip().split(".")
         if not sep or not all(p.strip() for p in path):
             raise InputError(f"--set: expected KEY.PATH=VALUE, got {item!r}")
+        if len(path) > MAX_YAML_DEPTH:
+            raise InputError(f"--set: the key is nested deeper than {MAX_YAML_DEPTH} levels")
         try:
-            value = yaml.safe_load(raw)
-        except yaml.YAMLError as exc:
+            value = load_yaml(raw)
+        except (yaml.YAMLError, ValueError) as exc:
             raise InputError(f"--set {key}: the value is not valid YAML ({exc})") from None
         for part in reversed(path):
             value = {part.strip(): value}

@@ -17,6 +17,7 @@ from lrp_gym.commands._common import (
     json_option,
     load_config,
     out_option,
+    parse_sets,
     plot_option,
     print_json,
     save_figure,
@@ -27,6 +28,7 @@ from lrp_gym.commands._common import (
     write_json,
     wrote,
 )
+from lrp_gym.config import deep_merge
 from lrp_gym.errors import InputError
 from lrp_gym.experiments.reproduce import PAPER, Reproduction, reproduce
 
@@ -132,6 +134,13 @@ def reproduce_paper(
     plot: str | None = plot_option("the error figure"),
     force: bool = force_option(),
     json_out: bool = json_option("the results"),
+    random_rooms: int = typer.Option(
+        0,
+        "--random-rooms",
+        metavar="N",
+        help="Instead of the scenario: AMCL on N generated rooms (room seeds 0..N-1), with the "
+        "radar chain and with true fingerprints (see docs/scenarios.md).",
+    ),
 ) -> None:
     """Run the full chain (radar, CFAR, tracking, look-up table, AMCL) along the scenario's
     path and compare the per-position errors with the paper's."""
@@ -145,14 +154,20 @@ def reproduce_paper(
     out_path = check_output(out, "--out", force, (".json",))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
     check_distinct(out_path, plot_path)
+    if random_rooms < 0:
+        raise InputError(f"--random-rooms: must not be negative, got {random_rooms}")
+    if random_rooms:
+        if true_fingerprints or plot_path:
+            raise InputError("--random-rooms: runs both fingerprint kinds and draws no --plot")
+        over = deep_merge(parse_sets(sets, scenario), {"radar": {"noise": noise}})
+        if particles is not None:
+            over = deep_merge(over, _particles(particles, 200))
+        _random_rooms(random_rooms, runs, seed, over, estimator, out_path)
+        return
     cfg = load_config(scenario, sets, fidelity)
     over: dict = {"radar": {"noise": noise}}
     if particles is not None:
-        over["localization"] = {
-            "initial_particles": particles,
-            "max_particles": particles,
-            "min_particles": min(cfg.localization.min_particles, particles),
-        }
+        over.update(_particles(particles, cfg.localization.min_particles))
     cfg = cfg.with_overrides(over)
     if cfg.localization.method == "grid":  # --set localization.method=grid means the same
         localizer = "grid"
@@ -233,6 +248,59 @@ def _print(name: str, data: dict, noise: bool) -> None:
     console.print(
         "time per frame: " + ", ".join(f"{k} {v:.2f} ms" for k, v in ms.items()), highlight=False
     )
+
+
+def _particles(n: int, min_particles: int) -> dict:
+    """Overrides for ``--particles``: N0 and the maximum, the minimum no larger."""
+    return {
+        "localization": {
+            "initial_particles": n,
+            "max_particles": n,
+            "min_particles": min(min_particles, n),
+        }
+    }
+
+
+def _random_rooms(n: int, runs: int, seed: int, over: dict, estimator: str, json_path) -> None:
+    """``--random-rooms``: the generated-room baseline, one line per room as it finishes."""
+    from lrp_gym.experiments.rooms import summary, sweep
+
+    def progress(r) -> None:
+        err_console.print(
+            f"room {r.seed}: {r.size_m[0]:.1f} x {r.size_m[1]:.1f} m, {r.obstacles} obstacles, "
+            f"{r.reflectors} reflectors ({r.kinds}), {r.frames} frames: AMCL "
+            f"{r.amcl_radar_m:.3f} m (true fingerprints {r.amcl_true_m:.3f} m)",
+            highlight=False,
+        )
+
+    results = sweep(
+        range(n), runs=runs, run_seed=seed, overrides=over, estimator=estimator, progress=progress
+    )
+    data = summary(results)
+    t = table(
+        f"AMCL mean error on {n} generated rooms ({runs} runs each)",
+        ("room", "size [m]", "obst.", "refl.", "kinds", "frames", "radar [m]", "true fp [m]"),
+    )
+    for r in results:
+        t.add_row(
+            str(r.seed),
+            f"{r.size_m[0]:.1f} x {r.size_m[1]:.1f} x {r.size_m[2]:.1f}",
+            str(r.obstacles),
+            str(r.reflectors),
+            r.kinds,
+            str(r.frames),
+            f"{r.amcl_radar_m:.3f}",
+            f"{r.amcl_true_m:.3f}",
+        )
+    console.print(t)
+    console.print(
+        f"median AMCL mean error: {data['median_amcl_radar_m']:.3f} m with the radar chain, "
+        f"{data['median_amcl_true_m']:.3f} m with true fingerprints",
+        highlight=False,
+    )
+    if json_path:
+        write_json(data, json_path)
+        wrote(json_path)
 
 
 def register(app: typer.Typer) -> None:

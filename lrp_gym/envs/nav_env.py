@@ -14,6 +14,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.error import ResetNeeded
 
 from lrp_gym.config import ScenarioConfig, load_scenario
 from lrp_gym.envs.observations import NavSnapshot, make_observation
@@ -139,6 +140,7 @@ class LRPRadarNavEnv(gym.Env):
         self._s_true = self._s_est = 0.0
         self._last_action = np.zeros(2)
         self._steps = 0
+        self._done = False  # the episode has terminated; step() pays nothing until reset()
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -154,6 +156,7 @@ class LRPRadarNavEnv(gym.Env):
             )
         self._last_action = np.zeros(2)
         self._steps = 0
+        self._done = False
         self.tracker.reset()
         self.estimate = self._amcl_estimate = None
         known = self.pose if self.cfg.localization.init == "gaussian" else None
@@ -170,7 +173,16 @@ class LRPRadarNavEnv(gym.Env):
         return self._observe(), self._info(collided=False, reached=False, rewards=None)
 
     def step(self, action):
+        if self.path is None:
+            raise ResetNeeded("call reset() first: step() needs an episode")
         action = self._check_action(action)
+        if self._done:
+            # As gymnasium's own envs do: warn, and pay nothing for stepping past the end.
+            gym.logger.warn(
+                "step() called after the episode terminated; call reset() to start a new one"
+            )
+            info = self._info(collided=False, reached=False, rewards=None)
+            return self._observe(), 0.0, True, False, info
         lim = self.world.robot
         speed = action[0] * (lim.max_speed_mps if action[0] >= 0 else lim.max_reverse_mps)
         turn = action[1] * lim.max_turn_rate_rps
@@ -218,6 +230,7 @@ class LRPRadarNavEnv(gym.Env):
         }
         reward = float(sum(rewards.values()))
         terminated = collided or reached
+        self._done = terminated
         obs = self._observe()
         info = self._info(collided=collided, reached=reached, rewards=rewards)
         if self.render_mode == "human":
@@ -228,6 +241,8 @@ class LRPRadarNavEnv(gym.Env):
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode='rgb_array'")
             return None
+        if self.path is None:
+            raise ResetNeeded("call reset() first: render() draws the current episode")
         if self._renderer is None:
             from lrp_gym.envs.rendering import Renderer
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lrp_gym.config import TaskConfig
+from lrp_gym.config import ScenarioError, TaskConfig
 from lrp_gym.world import Room
 
 
@@ -107,7 +107,12 @@ def sample_free_position(
         ok = room.free(cand, clearance_m)
         if ok.any():
             return cand[np.argmax(ok)]
-    raise RuntimeError("no free position found: the room is too cluttered for the robot")
+    raise ScenarioError(
+        [
+            f"robot.radius_m: no free position found for a robot of radius {clearance_m:.3g} m "
+            "(with margin) between the walls and room.obstacles"
+        ]
+    )
 
 
 def sample_goal_task(
@@ -139,4 +144,10 @@ def sample_goal_task(
         heading = np.arctan2(first[1], first[0]) + rng.uniform(-np.pi / 2, np.pi / 2)
         theta = (heading + np.pi) % (2 * np.pi) - np.pi
         return np.array([start[0], start[1], theta]), path
-    raise RuntimeError("could not sample a goal task: check task.goal distances against the room")
+    raise ScenarioError(
+        [
+            f"task.goal: no start and goal {g.min_distance_m:g}..{g.max_distance_m:g} m apart "
+            "with a free path were found in 200 tries; widen task.goal.min_distance_m / "
+            "max_distance_m or free the room (room.obstacles, robot.radius_m)"
+        ]
+    )

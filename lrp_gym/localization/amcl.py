@@ -30,7 +30,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from lrp_gym.config import LocalizationConfig
+from lrp_gym.config import LocalizationConfig, ScenarioError
 from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.localization.estimators import (
     best_k_mean,
@@ -109,6 +109,7 @@ class Amcl:
 
     # ------------------------------------------------------------------ sampling
     def _free(self, xy: np.ndarray) -> np.ndarray:
+        """Whether floor positions (N, 2) are free for the robot (pass ``particles[:, :2]``)."""
         if self._simple_room:
             c = self.clearance_m
             return (
@@ -128,7 +129,12 @@ class Amcl:
             cand = rng.random((max(2 * (n - len(out)), 16), 2)) * self._size_xy
             out = np.concatenate([out, cand[self._free(cand)]])
         if len(out) < n:
-            raise ValueError("the room has (almost) no free space for the robot")
+            raise ScenarioError(
+                [
+                    f"robot.radius_m: a robot of radius {self.clearance_m:g} m finds (almost) no "
+                    "free space between the walls and room.obstacles"
+                ]
+            )
         th = rng.uniform(-np.pi, np.pi, n)
         return np.column_stack([out[:n], th])
 
@@ -189,7 +195,7 @@ class Amcl:
             raise RuntimeError("call reset() before update()")
         cfg = self.cfg
         self.particles = sample_motion(self.particles, odometry, self.motion_noise, rng)
-        w = self.weights * self._free(self.particles)
+        w = self.weights * self._free(self.particles[:, :2])
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
             if self.global_proposal:

@@ -92,11 +92,14 @@ class LrpClassifier:
         peak = np.array([t.rcs_dbsm for t in layout.types], dtype=float)
         low = peak - cfg.rcs_tolerance_db - cfg.rcs_pattern_loss_db
         high = peak + cfg.rcs_tolerance_db
+        centre = (low + high) / 2.0
+        # No detection can be a reflector of a type that the layout does not use: empty window.
+        low = np.where(layout.counts_per_type() > 0, low, np.inf)
         return cls(
             low_dbsm=low,
             high_dbsm=high,
-            centre_dbsm=(low + high) / 2.0,
-            half_width_db=(high - low) / 2.0,
+            centre_dbsm=centre,
+            half_width_db=high - centre,
             min_range_m=float(min_range_m),
             max_range_m=float(max_range_m),
         )

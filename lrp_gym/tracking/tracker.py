@@ -98,9 +98,11 @@ class LrpTracker:
         self._capacity = layout.counts_per_type()
         self.identifier = ReflectorIdentifier(cfg, self.classifier, self._capacity, self.type_names)
         dz = np.abs(layout.positions_m[:, 2] - mount_height_m)
-        types = np.arange(len(self.type_names))
-        self._height_m = np.array([dz[layout.type_index == t].mean() for t in types])
-        self._min_height_m = np.array([dz[layout.type_index == t].min() for t in types])
+        # A type may be defined without any reflector (a catalogue): it never has a track, so
+        # its heights are placeholders.
+        sel = [layout.type_index == t for t in range(len(self.type_names))]
+        self._height_m = np.array([dz[s].mean() if s.any() else 0.0 for s in sel])
+        self._min_height_m = np.array([dz[s].min() if s.any() else 0.0 for s in sel])
         self._R = np.diag([cfg.measurement_std_m**2, cfg.velocity_std_mps**2])
         self._gate_range = float(chi2.ppf(cfg.gate_probability, 1))
         self._gate_2d = float(chi2.ppf(cfg.gate_probability, 2))

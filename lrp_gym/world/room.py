@@ -87,11 +87,15 @@ class Room:
     def free(self, xy: np.ndarray, clearance_m: float = 0.0) -> np.ndarray:
         """Whether floor positions (..., 2) are free for a robot disc of radius ``clearance_m``.
 
-        A position is free when it is inside the room at least ``clearance_m`` from each wall
+        Only 2-D points are accepted: poses (..., 3) must be sliced to ``[..., :2]`` by the
+        caller, since their heading would otherwise be compared with the room's height. A position is free when it is inside the room at least ``clearance_m`` from each wall
         and at least ``clearance_m`` from every obstacle's footprint (obstacles of any height
         block the robot).
         """
         xy = np.asarray(xy, dtype=float)
+        if xy.ndim == 0 or xy.shape[-1] != 2:
+            # A pose (x, y, theta) is not a floor position: pass ``poses[..., :2]``.
+            raise ValueError(f"Room.free expects floor positions of shape (..., 2), got {xy.shape}")
         ok = self.inside(xy, clearance_m)
         if self.obstacles:
             lo, hi = self.obstacle_bounds
@@ -100,6 +104,33 @@ class Room:
             gap = np.maximum(np.maximum(lo[:, :2] - p, p - hi[:, :2]), 0.0)
             blocked = np.linalg.norm(gap, axis=-1) <= clearance_m
             ok &= ~np.any(blocked, axis=-1)
+        return ok
+
+    def path_free(self, waypoints_xy: np.ndarray, clearance_m: float = 0.0) -> np.ndarray:
+        """Whether each leg of a polyline keeps a robot disc of radius ``clearance_m`` free.
+
+        Parameters
+        ----------
+        waypoints_xy : array of shape (K, 2)
+            Floor waypoints in metres.
+        clearance_m : float
+            Robot radius: a leg is free when every point on it is :meth:`free`.
+
+        Returns
+        -------
+        ndarray of bool, shape (K - 1,)
+        """
+        wp = np.asarray(waypoints_xy, dtype=float).reshape(-1, 2)
+        return self.legs_free(wp[:-1], wp[1:], clearance_m)
+
+    def legs_free(self, a: np.ndarray, b: np.ndarray, clearance_m: float = 0.0) -> np.ndarray:
+        """Whether floor segments a-b (N, 2) keep a disc of radius ``clearance_m`` free; (N,)."""
+        a = np.asarray(a, dtype=float).reshape(-1, 2)
+        b = np.asarray(b, dtype=float).reshape(-1, 2)
+        # The room is convex: a leg inside it (with margin) iff both ends are.
+        ok = self.inside(a, clearance_m) & self.inside(b, clearance_m)
+        for box in self.obstacles:
+            ok &= segment_box_distance_m(a, b, box.min_m[:2], box.max_m[:2]) > clearance_m
         return ok
 
     def segments_blocked(self, start: np.ndarray, end: np.ndarray) -> np.ndarray:
@@ -137,3 +168,41 @@ class Room:
         hit = (t_enter < t_exit - eps) & (t_exit > eps) & (t_enter < 1.0 - eps)
         hit &= ~np.any(parallel_out, axis=-1)
         return np.any(hit, axis=-1)
+
+
+def _point_segment_distance_m(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Distance from points p to segments a-b, all (..., 2)."""
+    ab = b - a
+    t = np.einsum("...i,...i->...", p - a, ab) / np.maximum(
+        np.einsum("...i,...i->...", ab, ab), 1e-24
+    )
+    closest = a + np.clip(t, 0.0, 1.0)[..., None] * ab
+    return np.linalg.norm(p - closest, axis=-1)
+
+
+def segment_box_distance_m(
+    a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> np.ndarray:
+    """Distance from floor segments a-b (N, 2) to the rectangle [lo, hi] (0 where they meet).
+
+    Two disjoint convex sets in the plane are closest at a vertex of one of them, so the
+    distance is the smallest of the segment ends to the rectangle and the corners to the segment.
+    """
+    a = np.asarray(a, dtype=float).reshape(-1, 2)
+    b = np.asarray(b, dtype=float).reshape(-1, 2)
+    ends = np.stack([a, b], axis=1)  # (N, 2, 2)
+    gap = np.maximum(np.maximum(lo - ends, ends - hi), 0.0)
+    d = np.min(np.linalg.norm(gap, axis=-1), axis=1)
+    corners = np.array([[lo[0], lo[1]], [lo[0], hi[1]], [hi[0], lo[1]], [hi[0], hi[1]]])
+    dc = _point_segment_distance_m(corners[None], a[:, None], b[:, None])  # (N, 4)
+    d = np.minimum(d, dc.min(axis=1))
+    # Slab test: the segment crosses the rectangle (possibly with both ends outside).
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = 1.0 / (b - a)
+        t0, t1 = (lo - a) * inv, (hi - a) * inv
+    tmin = np.where(np.isnan(t0), -np.inf, np.minimum(t0, t1))
+    tmax = np.where(np.isnan(t1), np.inf, np.maximum(t0, t1))
+    parallel_out = ((b - a) == 0.0) & ((a < lo) | (a > hi))
+    hit = (tmin.max(axis=1) <= tmax.min(axis=1)) & (tmax.min(axis=1) >= 0.0)
+    hit &= (tmin.max(axis=1) <= 1.0) & ~parallel_out.any(axis=1)
+    return np.where(hit, 0.0, d)

@@ -99,9 +99,12 @@ def test_all_problems_reported_at_once():
                 "robot": {"start_pose": [2.5, 2.5, 0]},
                 "room": {"obstacles": [{"min": [2, 2, 0], "max": [3, 3, 1]}]},
             },
-            "robot.start_pose: position [2.5, 2.5] is not in the free space",
+            "robot.start_pose: the robot (robot.radius_m 0.2 m) at [2.5, 2.5] overlaps",
         ),
-        ({"task": {"path": [[1, 1], [7, 1]]}}, "task.path[1]: waypoint [7, 1]"),
+        (
+            {"task": {"path": [[1, 1], [7, 1]]}},
+            "task.path[1]: the robot (robot.radius_m 0.2 m) at waypoint [7, 1]",
+        ),
         ({"radar": {"samples_per_chirp": 64}}, "does not cover the room diagonal"),
         ({"radar": {"chirp_period_s": 0.002}}, "unambiguous velocity"),
         (
