@@ -215,17 +215,21 @@ def _space(data: dict, key: str, given: Any, path: Path, option: str) -> Any:
     field = data.get(key)
     if not (isinstance(field, dict) and ":serialized:" in field):
         raise InputError(f"{option}: {path} has no readable {key}")
-    saved = _box(field)
     what = key.replace("_space", "")
+    shape = tuple(field.get("_shape") or ())
+    if given is not None and shape != tuple(given.shape):
+        raise InputError(
+            f"{option}: {path} was trained for {what}s of shape {shape}, "
+            f"the env has {tuple(given.shape)}"
+        )
+    try:
+        saved = _box(field)
+    except (KeyError, TypeError, ValueError):  # unreadable bounds
+        saved = None
     if given is None:
         if saved is None:
             raise InputError(f"{option}: {path}: the {key} is not a readable Box")
         return saved
-    if tuple(field.get("_shape") or ()) != tuple(given.shape):
-        raise InputError(
-            f"{option}: {path} was trained for {what}s of shape {tuple(field['_shape'])}, "
-            f"the env has {tuple(given.shape)}"
-        )
     if saved is not None and not _same_box(saved, given):
         raise InputError(f"{option}: {path} was trained for other {what} bounds than the env's")
     return given
