@@ -5,7 +5,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: install test test-all demo lint format bench clean
+.PHONY: install test test-integration test-all demo lint format bench clean
 
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -13,13 +13,19 @@ $(STAMP): pyproject.toml
 	@# torch first, pinned: on these machines 2.13.0 is a local CPU wheel; any other
 	@# spec pulls a multi-GB CUDA build. The rl extra then accepts the installed torch.
 	$(PY) -m pip install --quiet torch==2.13.0
-	$(PY) -m pip install --quiet -e '.[rl,dev,fast]'
+	$(PY) -m pip install --quiet -e '.[rl,dev,fast,zoo,video]'
 	@touch $(STAMP)
 
 install: $(STAMP)
 
 test: install
 	$(PY) -m pytest -q
+	$(MAKE) test-integration
+
+# Signals to a real training run, rl_zoo3 on configs/ppo.yaml, and the wheel installed into a
+# fresh venv outside the repo (a few minutes; CI runs them through `make test`).
+test-integration: install
+	$(PY) -m pytest -q -m integration
 
 test-all: install
 	$(PY) -m pytest -q -m ''

@@ -9,7 +9,6 @@ cross-track error (distance of the *true* position to the waypoint polyline).
 
 from __future__ import annotations
 
-import pickle
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
@@ -73,43 +72,26 @@ class SB3Policy:
         return self.model.predict(obs, state, episode_start, deterministic)
 
 
-def find_vecnormalize(model_path: str | Path) -> Path | None:
-    """The VecNormalize statistics saved with a model, if any.
+def load_ppo(
+    model_path: str | Path | None = None, spaces: tuple[Any, Any] = (None, None)
+) -> SB3Policy:
+    """Load a PPO model zip and its normalisation statistics, without unpickling anything.
 
-    Looks for, in order: ``<stem>_vecnormalize.pkl``; for a checkpoint
-    ``<prefix>_<n>_steps.zip`` the file ``<prefix>_vecnormalize_<n>_steps.pkl``; and
-    ``vecnormalize.pkl`` in the model's folder.
-    """
-    p = Path(model_path)
-    candidates = [p.with_name(f"{p.stem}_vecnormalize.pkl")]
-    if p.stem.endswith("_steps"):
-        prefix, n, _ = p.stem.rsplit("_", 2)
-        candidates.append(p.with_name(f"{prefix}_vecnormalize_{n}_steps.pkl"))
-    candidates.append(p.with_name("vecnormalize.pkl"))
-    return next((c for c in candidates if c.is_file()), None)
-
-
-def load_vecnormalize(path: str | Path) -> Any:
-    """A frozen VecNormalize read from ``path`` (no venv attached; only obs normalisation)."""
-    try:
-        with open(path, "rb") as f:
-            vn = pickle.load(f)
-        vn.obs_rms  # noqa: B018  (fails early on a pickle of something else)
-    except Exception as exc:
-        raise InputError(f"--model: cannot read VecNormalize statistics {path}: {exc}") from None
-    vn.training = False
-    vn.norm_reward = False
-    return vn
-
-
-def load_ppo(model_path: str | Path | None = None) -> SB3Policy:
-    """Load a PPO model zip and, when present, its VecNormalize statistics.
+    Parameters
+    ----------
+    model_path : path, optional
+        Default: the shipped model.
+    spaces : (observation_space, action_space), optional
+        The env's spaces; a model trained for other spaces is refused.
 
     Raises
     ------
     InputError
-        The file is missing or is not a readable SB3 PPO model.
+        The file is missing, is not a readable PPO model, was trained for other spaces, or its
+        statistics (``vecnormalize.json`` beside it, see :mod:`agents.model_io`) are missing.
     """
+    from agents import model_io
+
     path = Path(model_path) if model_path is not None else DEFAULT_MODEL
     if not path.is_file():
         hint = (
@@ -118,18 +100,23 @@ def load_ppo(model_path: str | Path | None = None) -> SB3Policy:
             else ""
         )
         raise InputError(f"--model: no such model file: {path}{hint}")
-    from stable_baselines3 import PPO
-
-    # Schedules are pickled closures; replace them so models load across Python versions.
-    custom = {"learning_rate": 0.0, "lr_schedule": lambda _: 0.0, "clip_range": lambda _: 0.0}
-    try:
-        model = PPO.load(path, device="cpu", custom_objects=custom)
-    except Exception as exc:
+    model_io.read_zip_data(path)  # a clear message for a non-model before the statistics
+    stats = model_io.find_stats(path)
+    if stats is None:
+        pkl = model_io.find_stats(path, ".pkl")
         raise InputError(
-            f"--model: {path} is not a readable PPO model: {type(exc).__name__}: {exc}"
-        ) from None
-    vn_path = find_vecnormalize(path)
-    return SB3Policy(model, load_vecnormalize(vn_path) if vn_path is not None else None)
+            f"--model: {path} has no normalisation statistics ({model_io.stats_path_for(path).name} "
+            "beside it)"
+            + (
+                f"; {pkl.name} is a pickle, which runs code when loaded: convert one you trust "
+                f"with `python -m agents.model_io {pkl}`"
+                if pkl is not None
+                else ""
+            )
+        )
+    doc = model_io.read_stats(stats)
+    model = model_io.load_ppo_safely(path, spaces)
+    return SB3Policy(model, model_io.obs_normalizer(doc))
 
 
 def make_agent(
@@ -143,13 +130,7 @@ def make_agent(
     if agent == "random":
         return RandomPolicy(env.action_space, np.random.default_rng(seed))
     if agent == "ppo":
-        policy = load_ppo(model_path)
-        want, got = policy.observation_space.shape, env.observation_space.shape
-        if want != got:
-            raise InputError(
-                f"--model: the model expects observations of shape {want}, the env gives {got}"
-            )
-        return policy
+        return load_ppo(model_path, (env.observation_space, env.action_space))
     raise InputError(f"--agent: unknown agent {agent!r}; choose one of {', '.join(AGENTS)}")
 
 
@@ -418,7 +399,6 @@ __all__ = [
     "SB3Policy",
     "cross_track_m",
     "evaluate",
-    "find_vecnormalize",
     "load_ppo",
     "make_agent",
     "make_eval_env",

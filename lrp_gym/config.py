@@ -7,6 +7,7 @@ naming its field, as a :class:`ScenarioError`.
 
 from __future__ import annotations
 
+import importlib.resources
 import math
 import sys
 from pathlib import Path
@@ -25,7 +26,18 @@ from pydantic_core import PydanticCustomError
 
 from lrp_gym.radar.fmcw import FmcwParameters
 
-CONFIGS_DIR = Path(__file__).resolve().parent.parent / "configs"
+
+def _configs_dir() -> Path:
+    """The shipped configs: package data of an installed wheel, else the checkout's configs/.
+
+    The wheel copies the top-level ``configs/`` into ``lrp_gym/configs`` (see pyproject.toml),
+    so there is one copy to edit; editable installs and source checkouts read it in place.
+    """
+    packaged = Path(str(importlib.resources.files("lrp_gym") / "configs"))
+    return packaged if packaged.is_dir() else Path(__file__).resolve().parent.parent / "configs"
+
+
+CONFIGS_DIR = _configs_dir()
 SCENARIOS_DIR = CONFIGS_DIR / "scenarios"
 
 

@@ -10,7 +10,6 @@ from agents.evaluate import (
     RandomPolicy,
     cross_track_m,
     evaluate,
-    find_vecnormalize,
     make_agent,
     make_eval_env,
     summarize,
@@ -111,13 +110,3 @@ def test_bad_inputs_raise_input_error(tmp_path):
         make_agent("ppo", env, bad)
     with pytest.raises(InputError, match="no such model"):
         make_agent("ppo", env, tmp_path / "missing.zip")
-
-
-def test_find_vecnormalize_conventions(tmp_path):
-    ck = tmp_path / "rl_model_500_steps.zip"
-    ck.touch()
-    assert find_vecnormalize(ck) is None
-    (tmp_path / "vecnormalize.pkl").touch()
-    assert find_vecnormalize(ck) == tmp_path / "vecnormalize.pkl"
-    (tmp_path / "rl_model_vecnormalize_500_steps.pkl").touch()
-    assert find_vecnormalize(ck) == tmp_path / "rl_model_vecnormalize_500_steps.pkl"

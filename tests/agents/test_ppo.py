@@ -26,14 +26,11 @@ def tiny_config(tmp_path, n_envs=1, **extra):
         "n_epochs": 2,
         "learning_rate": "lin_3e-4",
         "policy_kwargs": "dict(net_arch=[16, 16], activation_fn=nn.Tanh)",
-        "vec_env": "dummy",
-        "eval_freq": 256,
-        "n_eval_episodes": 1,
-        "checkpoint_freq": 256,
         **extra,
     }
+    lrp = {"vec_env": "dummy", "eval_freq": 256, "n_eval_episodes": 1, "checkpoint_freq": 256}
     path = tmp_path / "ppo.yaml"
-    path.write_text(yaml.safe_dump({ENV: hp}))
+    path.write_text(yaml.safe_dump({ENV: hp, "lrp-gym": {ENV: lrp}}))
     return path
 
 
@@ -41,6 +38,7 @@ def test_split_hyperparams_follows_zoo_conventions(tmp_path):
     env_id, raw = load_hyperparams(tiny_config(tmp_path))
     hp = split_hyperparams(raw)
     assert env_id == ENV and hp["n_envs"] == 1 and hp["n_timesteps"] == 1024
+    assert hp["eval_freq"] == 256 and hp["vec_env"] == "dummy"  # from the lrp-gym block
     assert hp["normalize"] == {"norm_obs": True, "norm_reward": True}
     lr = hp["ppo"]["learning_rate"]
     assert lr(1.0) == pytest.approx(3e-4) and lr(0.5) == pytest.approx(1.5e-4)
@@ -62,8 +60,18 @@ def test_config_errors(tmp_path):
 def test_committed_config_parses():
     env_id, raw = load_hyperparams("configs/ppo.yaml")
     hp = split_hyperparams(raw)
-    assert env_id == ENV
+    assert env_id == ENV and hp["vec_env"] == "subproc" and hp["eval_freq"] == 20000
     assert hp["ppo"]["batch_size"] <= hp["ppo"]["n_steps"] * hp["n_envs"]
+    # rl_zoo3 passes every key of the env's section to PPO: no lrp-gym key may be there.
+    sections = yaml.safe_load(open("configs/ppo.yaml"))
+    zoo_keys = {"n_envs", "n_timesteps", "policy", "normalize", "policy_kwargs", "env_kwargs"}
+    import inspect
+
+    from stable_baselines3 import PPO
+
+    ppo_args = set(inspect.signature(PPO.__init__).parameters)
+    for env_id in (k for k in sections if k != "lrp-gym"):
+        assert set(sections[env_id]) <= zoo_keys | ppo_args, env_id
 
 
 def test_smoke_train_save_reload_evaluate_and_resume(tmp_path):
@@ -74,13 +82,15 @@ def test_smoke_train_save_reload_evaluate_and_resume(tmp_path):
     assert [s for s, _ in list_checkpoints(run)] == [512, 256]
     for f in (
         "final/model.zip",
-        "final/vecnormalize.pkl",
+        "final/vecnormalize.json",
         "best/best_model.zip",
-        "best/vecnormalize.pkl",
+        "best/vecnormalize.json",
         "eval/evaluations.npz",
-        "checkpoints/rl_model_vecnormalize_512_steps.pkl",
+        "checkpoints/rl_model_vecnormalize_512_steps.json",
+        "checkpoints/rl_model_vecnormalize_256_steps.json",
     ):
         assert (run / f).is_file(), f
+    assert not list(run.rglob("*.pkl"))  # no pickles: loading them would run code
 
     # Reload with the saved normalisation statistics; they are the training ones, frozen.
     policy = load_ppo(run / "final" / "model.zip")
@@ -91,7 +101,7 @@ def test_smoke_train_save_reload_evaluate_and_resume(tmp_path):
     assert s["episodes"] == 1 and s["mean_steps"] >= 1
 
     # Resume: the timestep count and the learning curve continue.
-    with pytest.raises(InputError, match="already holds checkpoints"):
+    with pytest.raises(InputError, match="holds a finished run of 512 steps"):
         train(cfg, timesteps=1024, out=run, seed=3, progress_bar=False)
     info2 = train(cfg, timesteps=1024, out=run, resume=True, seed=3, progress_bar=False)
     assert info2["resumed_from"] == 512 and info2["timesteps"] == 1024
@@ -106,7 +116,7 @@ def test_smoke_train_save_reload_evaluate_and_resume(tmp_path):
     # Shipping copies model + stats and records the run and a final evaluation.
     doc = export_model(run, tmp_path / "models", eval_env_id=ENV, episodes=1, which="final")
     assert (tmp_path / "models" / "ppo_lrp_nav.zip").is_file()
-    assert (tmp_path / "models" / "vecnormalize.pkl").is_file()
+    assert (tmp_path / "models" / "vecnormalize.json").is_file()
     saved = json.loads((tmp_path / "models" / "ppo_lrp_nav.json").read_text())
     assert saved["timesteps"] == 1024 and saved["final_eval"]["episodes"] == 1
     assert doc["final_eval"]["env_id"] == ENV

@@ -1,0 +1,116 @@
+"""Outputs of a training run that are read after it: the learning curve and a shipped model."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lrp_gym.errors import InputError
+
+
+def write_json(path: Path, data: dict[str, Any]) -> Path:
+    """Write JSON atomically (see :func:`lrp_gym.commands._common.write_json`)."""
+    from lrp_gym.commands._common import write_json as _write
+
+    return _write(data, path)
+
+
+def plot_learning_curve(run_dir: str | Path, out_png: str | Path, title: str = "PPO") -> Path:
+    """Mean eval return and success rate against timesteps from ``eval/evaluations.npz``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from lrp_gym.commands._common import save_figure
+
+    npz = Path(run_dir) / "eval" / "evaluations.npz"
+    if not npz.is_file():
+        raise InputError(f"no learning curve: {npz} is missing")
+    with np.load(npz) as d:
+        t, res = d["timesteps"], d["results"]
+        succ = d["successes"] if "successes" in d and d["successes"].size else None
+    fig, ax = plt.subplots(figsize=(6.4, 3.6))
+    mean, std = res.mean(axis=1), res.std(axis=1)
+    ax.plot(t, mean, color="C0", marker="o" if len(t) < 3 else None, label="mean eval return")
+    ax.fill_between(t, mean - std, mean + std, color="C0", alpha=0.2)
+    ax.set_xlabel("timesteps")
+    ax.set_ylabel("return", color="C0")
+    if succ is not None and len(succ) == len(t):
+        ax2 = ax.twinx()
+        ax2.plot(t, 100 * succ.mean(axis=1), color="C1", label="success rate")
+        ax2.set_ylabel("success rate [%]", color="C1")
+        ax2.set_ylim(-5, 105)
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    return save_figure(fig, out_png)
+
+
+def export_model(
+    run_dir: str | Path,
+    dest_dir: str | Path,
+    name: str = "ppo_lrp_nav",
+    which: str = "best",
+    eval_env_id: str = "LRPRadarNav-v0",
+    episodes: int = 50,
+    seed: int = 1000,
+) -> dict[str, Any]:
+    """Ship a run's model: ``<name>.zip`` + ``vecnormalize.json`` + ``<name>.json``.
+
+    The JSON holds the run info (command, timesteps, wall time) and a final evaluation of the
+    exported model on ``eval_env_id`` (goal episodes on seeds ``seed, seed + 1, ...``).
+
+    Parameters
+    ----------
+    which : {"best", "final"}
+        EvalCallback's best model or the model at the end of training.
+    """
+    from agents.evaluate import evaluate, load_ppo, make_eval_env, public
+    from agents.model_io import find_stats
+
+    run_dir, dest = Path(run_dir), Path(dest_dir)
+    src = run_dir / ("best/best_model.zip" if which == "best" else "final/model.zip")
+    if not src.is_file():
+        raise InputError(f"--export: {src} does not exist (has the run finished?)")
+    stats = find_stats(src)
+    if stats is None:
+        raise InputError(f"--export: {src} has no normalisation statistics beside it")
+    dest.mkdir(parents=True, exist_ok=True)
+    for source, target in ((stats, dest / "vecnormalize.json"), (src, dest / f"{name}.zip")):
+        tmp = target.with_name(target.name + ".tmp")
+        shutil.copyfile(source, tmp)
+        tmp.replace(target)
+    env = make_eval_env("ppo", eval_env_id)
+    t0 = time.perf_counter()
+    policy = load_ppo(dest / f"{name}.zip", (env.observation_space, env.action_space))
+    summary = public(evaluate(policy, env, episodes, seed))
+    env.close()
+    summary.pop("per_episode", None)
+    info_path = run_dir / "run_info.json"
+    run_info = json.loads(info_path.read_text()) if info_path.is_file() else {}
+    doc = {
+        "model": f"{name}.zip",
+        "statistics": "vecnormalize.json",
+        "source": str(src),
+        "train_command": run_info.get("command"),
+        "config": run_info.get("config"),
+        "env_id": run_info.get("env_id"),
+        "seed": run_info.get("seed"),
+        "timesteps": run_info.get("timesteps"),
+        "wall_time_s": run_info.get("wall_time_s"),
+        "hyperparams": run_info.get("hyperparams"),
+        "final_eval": {
+            "env_id": eval_env_id,
+            "episodes": episodes,
+            "seed": seed,
+            "eval_wall_time_s": round(time.perf_counter() - t0, 1),
+            **summary,
+        },
+    }
+    write_json(dest / f"{name}.json", doc)
+    return doc
