@@ -25,6 +25,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from lrp_gym.radar.fmcw import FmcwParameters
+from lrp_gym.scenario_yaml import load_yaml
 
 
 def _configs_dir() -> Path:
@@ -757,55 +758,6 @@ def load_scenario(source: str | Path | dict[str, Any] | ScenarioConfig) -> Scena
     except ValueError as exc:
         raise ScenarioError([f"cannot read YAML: {exc}"], str(path)) from None
     return ScenarioConfig.from_dict(data, str(path))
-
-
-#: Deepest nesting of mappings and lists a scenario may have (the schema needs 5).
-MAX_YAML_DEPTH = 32
-
-
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """A SafeLoader that rejects a mapping key given twice (PyYAML keeps the last one)."""
-
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
-        seen: set = set()
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=deep)
-            if isinstance(key, (str, int, float, bool)) or key is None:
-                if key in seen:
-                    raise yaml.constructor.ConstructorError(
-                        "while constructing a mapping",
-                        node.start_mark,
-                        f"found duplicate key {key!r}",
-                        key_node.start_mark,
-                    )
-                seen.add(key)
-        return super().construct_mapping(node, deep=deep)
-
-
-def _depth_ok(text: str) -> None:
-    """Refuse nesting deeper than :data:`MAX_YAML_DEPTH` before the recursive parser sees it."""
-    depth = 0
-    for event in yaml.parse(text, Loader=yaml.SafeLoader):
-        if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
-            depth += 1
-            if depth > MAX_YAML_DEPTH:
-                raise ValueError(f"nested deeper than {MAX_YAML_DEPTH} levels")
-        elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
-            depth -= 1
-
-
-def load_yaml(text: str) -> Any:
-    """Parse scenario YAML safely: no duplicate keys, bounded nesting.
-
-    Raises
-    ------
-    yaml.YAMLError
-        Malformed YAML or a duplicate key.
-    ValueError
-        Nesting deeper than :data:`MAX_YAML_DEPTH`.
-    """
-    _depth_ok(text)
-    return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 (a SafeLoader subclass)
 
 
 def save_scenario(cfg: ScenarioConfig, path: str | Path, header: str = "") -> Path:

@@ -163,7 +163,8 @@ def parse_sets(values: list[str] | None, scenario: str | None = None) -> dict[st
     """
     import yaml
 
-    from lrp_gym.config import MAX_YAML_DEPTH, deep_merge, load_scenario, load_yaml
+    from lrp_gym.config import deep_merge, load_scenario
+    from lrp_gym.scenario_yaml import MAX_YAML_DEPTH, load_yaml
 
     out: dict[str, Any] = {}
     for item in values or []:

@@ -14,7 +14,8 @@ import pytest
 from gymnasium.error import ResetNeeded
 
 from lrp_gym.cli import main
-from lrp_gym.config import ScenarioError, load_scenario, load_yaml
+from lrp_gym.config import ScenarioError, load_scenario
+from lrp_gym.scenario_yaml import load_yaml
 
 BOX = "{min: [2, 2, 0], max: [3, 3, 1]}"
 ROWS = [
@@ -166,3 +167,21 @@ def test_stepping_after_termination_pays_nothing_until_reset():
     env.reset(seed=1)
     _, reward, terminated, _, _ = env.step(np.array([0.0, 0.0]))
     assert not terminated and reward == pytest.approx(-0.01)
+
+
+def test_observation_types_are_the_registry():
+    from lrp_gym.config import OBSERVATION_TYPES, ObservationConfig
+    from lrp_gym.envs import observations
+
+    assert set(OBSERVATION_TYPES) == set(observations.OBSERVATION_TYPES)
+
+    @observations.register_observation("custom-test")
+    class Custom(observations.ObservationType):
+        pass
+
+    try:
+        assert ObservationConfig(type="custom-test").type == "custom-test"
+    finally:
+        del observations.OBSERVATION_TYPES["custom-test"]
+    with pytest.raises(ValueError, match="unknown observation type 'custom-test'"):
+        ObservationConfig(type="custom-test")
