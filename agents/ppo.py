@@ -120,10 +120,16 @@ def _resume_model(checkpoints: list[tuple[int, Path]], venv: Any, hp: dict, run_
     steps, path = checkpoints[0]
     stats = find_stats(path)
     if stats is None:
+        pkl = find_stats(path, ".pkl")
+        hint = (
+            f"; {pkl.name} is a pickle (runs code when loaded): convert it, if you trust it, "
+            f"with `python -m agents.model_io {pkl}`"
+            if pkl is not None
+            else "; delete that checkpoint to resume from an older one"
+        )
         raise InputError(
             f"--resume: {path} has no normalisation statistics ({stats_path_for(path).name}); "
-            "refusing to train on without them (delete that checkpoint to resume from an "
-            "older one)"
+            f"refusing to train on without them{hint}"
         )
     doc = read_stats(stats, "--resume")
     if hp["normalize"] is not None and not doc["norm_obs"]:
@@ -217,8 +223,6 @@ def train(
         The run info; ``status`` is ``done`` or ``interrupted`` and ``files`` lists what the
         end of the run wrote.
     """
-    from stable_baselines3.common.utils import set_random_seed
-
     env_id, raw = load_hyperparams(config, env_id)
     hp = split_hyperparams(raw)
     requested = int(timesteps) if timesteps is not None else hp["n_timesteps"]
@@ -231,7 +235,21 @@ def train(
             f"--timesteps: the run already has {checkpoints[0][0]} steps; give a larger total "
             "to extend it"
         )
+    model, venv, eval_venv, start = _build(hp, env_id, seed, verbose, run_dir, checkpoints)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    info = _start_info(config, env_id, raw, hp, run_dir, seed, requested, start, model, resume)
+    if info["target_timesteps"] != requested:
+        log(
+            f"--timesteps: {requested} rounded up to {info['target_timesteps']} (PPO trains on "
+            f"whole rollouts of n_steps {model.n_steps} x n_envs {model.n_envs})"
+        )
+    return _run(model, venv, eval_venv, hp, info, progress_bar, log)
+
+
+def _build(hp: dict, env_id: str, seed: int, verbose: int, run_dir: Path, checkpoints: list):
+    """Envs and model: new, or from the newest checkpoint; no worker is left behind on error."""
     import torch
+    from stable_baselines3.common.utils import set_random_seed
 
     # Small MLPs: one thread avoids oversubscribing the cores the env workers need.
     torch.set_num_threads(1)
@@ -240,7 +258,7 @@ def train(
     eval_venv = None
     try:
         eval_venv = _eval_venv(hp, env_id, seed)
-        if resume:
+        if checkpoints:
             model, venv, start = _resume_model(checkpoints, venv, hp, run_dir)
         else:
             model, venv = _new_model(venv, hp, seed, verbose, run_dir)
@@ -250,14 +268,7 @@ def train(
         if eval_venv is not None:
             ck.close_venv(eval_venv)
         raise
-    run_dir.mkdir(parents=True, exist_ok=True)
-    info = _start_info(config, env_id, raw, hp, run_dir, seed, requested, start, model, resume)
-    if info["target_timesteps"] != requested:
-        log(
-            f"--timesteps: {requested} rounded up to {info['target_timesteps']} (PPO trains on "
-            f"whole rollouts of n_steps {model.n_steps} x n_envs {model.n_envs})"
-        )
-    return _run(model, venv, eval_venv, hp, info, progress_bar, log)
+    return model, venv, eval_venv, start
 
 
 def _start_info(config, env_id, raw, hp, run_dir, seed, requested, start, model, resume):

@@ -56,13 +56,10 @@ def train(
         help="Episodes of the shipped model's final eval on LRPRadarNav-v0.",
     ),
 ) -> None:
-    """Train PPO; checkpoints, best model and normalisation statistics go to the run folder.
+    """Train PPO; checkpoints, best model and statistics go to the run folder (--out).
 
-    Every run ends with a checkpoint, also on Ctrl-C or SIGTERM (exit code 130); the message
-    then gives the command that resumes it. Models and statistics are saved so that loading
-    them runs no code (statistics as JSON, see docs/agents.md).
+    Every run ends with a checkpoint, also on Ctrl-C or SIGTERM (exit 130, resume command shown).
     """
-    from agents.ppo import export_model
     from agents.ppo import train as run
 
     if export_episodes < 1:
@@ -87,17 +84,24 @@ def train(
             print_json(info)
         raise typer.Exit(130)
     if export is not None:
-        doc = export_model(info["run_dir"], export, episodes=export_episodes)
-        for name in (doc["model"], doc["statistics"], "ppo_lrp_nav.json"):
-            _line(say, f"wrote {Path(export) / name}")
-        fe = doc["final_eval"]
-        say.print(
-            f"shipped {export}/{doc['model']}: on {fe['env_id']} success "
-            f"{100 * fe['success_rate']:.0f} % over {fe['episodes']} episodes"
-        )
-        info["export"] = doc
+        info["export"] = _export(say, info["run_dir"], export, export_episodes)
     if json_out:
         print_json(info)
+
+
+def _export(say: Console, run_dir: str, export: Path, episodes: int) -> dict:
+    """Ship the run's best model to ``export`` and evaluate it there."""
+    from agents.ppo import export_model
+
+    doc = export_model(run_dir, export, episodes=episodes)
+    for name in (doc["model"], doc["statistics"], "ppo_lrp_nav.json"):
+        _line(say, f"wrote {Path(export) / name}")
+    fe = doc["final_eval"]
+    say.print(
+        f"shipped {export}/{doc['model']}: on {fe['env_id']} success "
+        f"{100 * fe['success_rate']:.0f} % over {fe['episodes']} episodes"
+    )
+    return doc
 
 
 def _line(say: Console, text: str) -> None:
