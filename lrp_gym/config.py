@@ -138,10 +138,25 @@ class SurfacesConfig(Strict):
     obstacles: Fraction = 0.8
 
 
+#: Largest room side (m): an indoor room; the map-wide grids of the localisers scale with area.
+MAX_ROOM_SIDE_M = 100.0
+
+
 class RoomConfig(Strict):
     size: PosVec3 = [5.0, 5.0, 4.0]
     obstacles: list[BoxConfig] = []
     surfaces: SurfacesConfig = SurfacesConfig()
+
+    @field_validator("size")
+    @classmethod
+    def _indoor(cls, size: list[float]) -> list[float]:
+        if max(size) > MAX_ROOM_SIDE_M:
+            raise PydanticCustomError(
+                "room_size",
+                "every side must be at most {limit} m (an indoor room), got {size}",
+                {"limit": MAX_ROOM_SIDE_M, "size": size},
+            )
+        return size
 
 
 # --------------------------------------------------------------------------- reflectors

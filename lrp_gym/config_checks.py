@@ -178,9 +178,14 @@ def _task_problems(cfg: ScenarioConfig, room) -> Iterator[str]:
             )
 
 
+_MAX_GRID_POINTS = 250_000
+
+
 def free_grid(room, clearance_m: float, grid_m: float = FREE_GRID_M) -> np.ndarray:
     """Floor grid points (N, 2) where a robot disc of radius ``clearance_m`` is free."""
     size = np.asarray(room.size_m[:2], dtype=float)
+    # Coarser in a large room: the check needs the free space's extent, not its detail.
+    grid_m = max(grid_m, float(np.sqrt(size[0] * size[1] / _MAX_GRID_POINTS)))
     xs = np.arange(grid_m / 2, size[0], grid_m)
     ys = np.arange(grid_m / 2, size[1], grid_m)
     xy = np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1).reshape(-1, 2)

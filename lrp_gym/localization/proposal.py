@@ -28,6 +28,8 @@ from scipy.special import logsumexp
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.tracking.fingerprint import Fingerprint
 
+_CHUNK = 20_000
+
 
 class MeasurementGrid:
     """Free floor positions on a regular grid and the frame likelihood on them.
@@ -55,8 +57,16 @@ class MeasurementGrid:
         return len(self.centres_m)
 
     def log_likelihood(self, model: FingerprintModel, fingerprint: Fingerprint) -> np.ndarray:
-        """Heading-free log-likelihood (C,) of the frame at every free cell centre."""
-        return model.log_likelihood(self.centres_m, fingerprint)
+        """Heading-free log-likelihood (C,) of the frame at every free cell centre (in chunks:
+        the model's work arrays grow with detections x reflectors x positions)."""
+        xy = self.centres_m
+        return np.concatenate(
+            [
+                model.log_likelihood(xy[i : i + _CHUNK], fingerprint)
+                for i in range(0, len(xy), _CHUNK)
+            ]
+            or [np.zeros(0)]
+        )
 
     def draw(
         self, loglik: np.ndarray, n: int, rng: np.random.Generator

@@ -185,3 +185,11 @@ def test_observation_types_are_the_registry():
         del observations.OBSERVATION_TYPES["custom-test"]
     with pytest.raises(ValueError, match="unknown observation type 'custom-test'"):
         ObservationConfig(type="custom-test")
+
+
+def test_room_larger_than_indoor_is_rejected_before_any_grid_is_built():
+    """A fuzzed room of 5e16 m once made the free-space check allocate exabytes."""
+    from lrp_gym.config import ScenarioError, load_scenario
+
+    with pytest.raises(ScenarioError, match="room.size"):
+        load_scenario("ipin2023").with_overrides({"room": {"size": [5.0, 4.8e16, 4.0]}})
