@@ -93,7 +93,9 @@ class Amcl:
         self.global_proposal = cfg.global_proposal
         if self.global_proposal:
             self.grid = MeasurementGrid(self._size_xy, cfg.global_grid_m, self._free)
-            self.start_grid = MeasurementGrid(self._size_xy, cfg.global_grid_m / 2.0, self._free)
+            self.start_grid = MeasurementGrid(
+                self._size_xy, cfg.global_grid_m / 2.0, self._free, max_cells=160_000
+            )
         self.lost = LostTest(cfg.lost_drift_nats, cfg.lost_threshold_nats)
         self._grid_loglik: np.ndarray | None = None
         self._pending_global = False
@@ -389,10 +391,8 @@ class Amcl:
         if n_random:
             injected = rng.choice(n_new, n_random, replace=False)
             new[injected] = self._injected(n_random, rng)
-        self.n_injected = n_random
-        if n_random:
-            new_weights = new_weights.copy()
-            new_weights[injected] = 1.0 / n_new
+            new_weights[injected] = 1.0 / n_new  # a fresh array from either resampler
             new_weights /= new_weights.sum()
+        self.n_injected = n_random
         self.particles = new
         self.weights = new_weights

@@ -293,7 +293,8 @@ class FingerprintModel:
             z = np.asarray(z, dtype=float)[order]
             dens_v = None
             if doppler:
-                dens_v = self._doppler_density(np.asarray(vel)[order], expected_v[t], dtype)
+                v_sorted = np.asarray(vel)[order]
+                dens_v = self._doppler_density(v_sorted, expected_v[t], dtype)
             s2 = self.measurement_var_m2 + np.asarray(var, dtype=float)[order]
             half_inv = (-0.5 / s2).astype(dtype)[:, None]
             log_norm = -0.5 * np.log(2.0 * np.pi * s2)
@@ -340,7 +341,7 @@ class FingerprintModel:
                 rs *= half_inv[:, :, None]
                 np.exp(rs, out=rs)
                 if doppler:
-                    rs *= self._doppler_density(np.asarray(vel)[order], structure_v, dtype)
+                    rs *= self._doppler_density(v_sorted, structure_v, dtype)
                 g *= dtype(1.0 - s_prob)
                 g += dtype(s_prob) * rs.mean(axis=1)
             g *= ((1.0 - c) * np.exp(log_norm)).astype(dtype)[:, None]

@@ -23,7 +23,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.special import logsumexp
 
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.tracking.fingerprint import Fingerprint
@@ -42,9 +41,13 @@ class MeasurementGrid:
         Grid spacing.
     free : callable
         ``free(xy) -> bool mask`` of positions the robot can occupy.
+    max_cells : int
+        Cell budget: ``cell_m`` grows in rooms that would need more cells.
     """
 
-    def __init__(self, size_xy_m: np.ndarray, cell_m: float, free) -> None:
+    def __init__(self, size_xy_m: np.ndarray, cell_m: float, free, max_cells: int = 40_000) -> None:
+        # A large room gets coarser cells: the grid is evaluated on every frame.
+        cell_m = max(cell_m, float(np.sqrt(np.prod(size_xy_m) / max_cells)))
         nx, ny = np.maximum(np.floor(np.asarray(size_xy_m) / cell_m).astype(int), 1)
         gx = (np.arange(nx) + 0.5) * (size_xy_m[0] / nx)
         gy = (np.arange(ny) + 0.5) * (size_xy_m[1] / ny)
@@ -117,8 +120,10 @@ class LostTest:
         total = float(np.sum(weights))
         if not total > 0.0:
             return
-        with np.errstate(divide="ignore"):
-            marginal = float(logsumexp(cloud_loglik, b=weights / total))
+        # Plain numpy: scipy's logsumexp costs ~0.6 ms per call here (env step path).
+        top = float(np.max(cloud_loglik))
+        with np.errstate(divide="ignore"):  # all weight on -inf particles: -inf, no warning
+            marginal = top + float(np.log(np.dot(weights / total, np.exp(cloud_loglik - top))))
         self.last_deficit_nats = best_loglik - marginal
         self.statistic_nats = max(
             0.0, self.statistic_nats + self.last_deficit_nats - self.drift_nats
