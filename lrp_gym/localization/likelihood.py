@@ -336,7 +336,7 @@ class FingerprintModel:
                         structure_v = structure_velocities_mps(
                             self.room, self.mount_height_m, xy, velocity_xy
                         ).astype(dtype)
-                rs = structure[None, :, :] - z.astype(dtype)[:, None, None]  # (n, 9, N)
+                rs = structure[None, :, :] - z.astype(dtype)[:, None, None]  # (n, 13, N)
                 rs *= rs
                 rs *= half_inv[:, :, None]
                 np.exp(rs, out=rs)
