@@ -241,15 +241,26 @@ class LocalizationStack:
             detections); it may draw from ``rng``.
         """
         t0 = time.perf_counter()
-        detections = self.sensor.measure(
-            true_pose, velocity_xy, rng, hidden=hidden, extra_scatterers=extra_scatterers
-        )
+        detections = self.measure(true_pose, velocity_xy, rng, hidden, extra_scatterers)
         if filter_detections is not None:
             detections = filter_detections(detections)
         radar_s = time.perf_counter() - t0
         ego = EgoMotion.from_velocity(velocity_xy, true_pose[2], odometry)
         result = self.localize(detections, ego, rng)
         return replace(result, elapsed_s={"radar": radar_s, **result.elapsed_s})
+
+    def measure(
+        self,
+        true_pose: np.ndarray,
+        velocity_xy: np.ndarray,
+        rng: np.random.Generator,
+        hidden: np.ndarray | None = None,
+        extra_scatterers: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> Detections:
+        """The radar stage alone: this episode's sensor at the true pose (see :meth:`step`)."""
+        return self.sensor.measure(
+            true_pose, velocity_xy, rng, hidden=hidden, extra_scatterers=extra_scatterers
+        )
 
     def localize(
         self, frame: Detections | Fingerprint, ego: EgoMotion, rng: np.random.Generator
