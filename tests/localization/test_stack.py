@@ -76,9 +76,9 @@ def test_tracker_is_identified_by_this_frames_posterior(paper_cfg, paper_world):
     traj = path_trajectory(np.asarray(paper_cfg.task.path), paper_cfg.robot.max_speed_mps, 0.25)
     egos = ego_motions(traj, world, np.random.default_rng(4))
     rng = np.random.default_rng(3)
-    stack.reset(rng, None)
+    stack.reset(rng, traj.poses[0])  # converged from the start: the prior ranks the tracks
     differs_from_previous_cloud = False
-    for k in range(10):
+    for k in range(len(traj)):
         before = stack.localizer.particles[:, :2].copy(), stack.localizer.weights.copy()
         res = stack.step(traj.poses[k], traj.velocities_xy_mps[k], egos[k].odometry, rng)
         loc = stack.localizer
