@@ -300,10 +300,8 @@ class LocalizationStack:
 
     def _prior(
         self, particles_xy: np.ndarray, weights: np.ndarray, confident: bool
-    ) -> DistancePrior | None:
-        """The reflector distances a cloud predicts, for the tracker (None: not map-aided)."""
-        if not self.map_aided:
-            return None
+    ) -> DistancePrior:
+        """The reflector distances a cloud predicts: map-aided identification for the tracker."""
         w = self.world
         return DistancePrior.from_particles(
             w.layout, w.mount_height_m, particles_xy, weights, confident=confident
@@ -326,14 +324,16 @@ class LocalizationStack:
             estimate = loc.update(odometry, weighed, rng, recovery=own_fit, speed_mps=ego.speed_mps)
             # This frame's posterior; it ranks the tracks only once converged (right after a
             # global start its heaviest mode may be a mirror image).
-            prior = self._prior(loc.particles[:, :2], loc.weights, estimate.converged)
+            prior = None
+            if self.map_aided:
+                prior = self._prior(loc.particles[:, :2], loc.weights, estimate.converged)
             fingerprint = tracker.update(detections, self.dt_s, tracker_ego, prior, window)
         else:
             # The cloud before this frame's update, moved by the odometry.
-            moved = apply_odometry(loc.particles, odometry) if self.map_aided else None
-            prior = (
-                None if moved is None else self._prior(moved[:, :2], loc.weights, self.converged)
-            )
+            prior = None
+            if self.map_aided:
+                moved = apply_odometry(loc.particles, odometry)
+                prior = self._prior(moved[:, :2], loc.weights, self.converged)
             fingerprint = tracker.update(detections, self.dt_s, tracker_ego, prior)
             estimate = loc.update(
                 odometry, fingerprint if fingerprint.count else None, rng, recovery=own_fit
