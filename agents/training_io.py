@@ -78,9 +78,7 @@ def learning_curve_figure(
         ax2.set_ylim(-5, 105)
         h2, l2 = ax2.get_legend_handles_labels()
         handles, labels, top = handles + h2, labels + l2, ax2
-    top.legend(
-        handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=3
-    )
+    top.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=3)
     ax.set_title(title)
     ax.grid(alpha=0.3)
     return fig

@@ -38,6 +38,8 @@ def test_band_is_one_std_over_episodes_and_labelled():
 def test_plot_learning_curve_writes_png(tmp_path):
     t, returns, successes = _curve(np.random.default_rng(1))
     (tmp_path / "eval").mkdir()
-    np.savez(tmp_path / "eval" / "evaluations.npz", timesteps=t, results=returns, successes=successes)
+    np.savez(
+        tmp_path / "eval" / "evaluations.npz", timesteps=t, results=returns, successes=successes
+    )
     out = plot_learning_curve(tmp_path, tmp_path / "curve.png")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
