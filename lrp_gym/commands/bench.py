@@ -56,7 +56,7 @@ def bench(
     out_path = check_output(out, "--out", force, (".json",))
     cfg = load_config(scenario, sets)
     _pin_to_one_core()
-    results: dict = {}
+    results: dict = {"machine": _machine()}
     for name in names:
         module, func = COMPONENTS[name]
         fn = getattr(importlib.import_module(module), func)
@@ -85,6 +85,14 @@ def bench(
     console.print(table)
     if out_path is not None:
         wrote(out_path)
+
+
+def _machine() -> dict:
+    """CPU count and load before the run: speeds from a busy machine are not comparable."""
+    import os
+
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    return {"cpus": os.cpu_count(), "load_avg_1min": load}
 
 
 def _pin_to_one_core() -> None:
