@@ -64,9 +64,7 @@ def _rerun(row: res.Row) -> None:
     for args in row.commands:
         argv = [*args, "--json"]
         commands.append("lrp-gym " + " ".join(argv))
-        err_console.print(
-            f"running {commands[-1]}", highlight=False, markup=False, soft_wrap=True
-        )
+        err_console.print(f"running {commands[-1]}", highlight=False, markup=False, soft_wrap=True)
         proc = subprocess.run(
             [sys.executable, "-m", "lrp_gym.cli", *argv],
             capture_output=True,
