@@ -64,9 +64,11 @@ def learning_curve_figure(
     marker = "o" if len(t) < 3 else None
     ax.plot(t, mean, color="C0", marker=marker, label=f"mean return over {n_eval} eval episodes")
     # The band is the spread of single episodes, not a confidence interval of the mean.
-    ax.fill_between(
-        t, mean - std, mean + std, color="C0", alpha=0.2, label="mean ± 1 std over episodes"
-    )
+    band = "mean ± 1 std over episodes"
+    if len(t) > 1:
+        ax.fill_between(t, mean - std, mean + std, color="C0", alpha=0.2, label=band)
+    else:  # one evaluation: a band has no width, so draw it as an error bar
+        ax.errorbar(t, mean, yerr=std, fmt="none", ecolor="C0", alpha=0.5, capsize=6, label=band)
     ax.set_xlabel("training timesteps [env steps]")
     ax.set_ylabel("episode return [sum of rewards]", color="C0")
     handles, labels = ax.get_legend_handles_labels()

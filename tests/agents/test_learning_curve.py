@@ -43,3 +43,14 @@ def test_plot_learning_curve_writes_png(tmp_path):
     )
     out = plot_learning_curve(tmp_path, tmp_path / "curve.png")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_single_evaluation_shows_its_spread():
+    import matplotlib.pyplot as plt
+
+    returns = np.array([[1.0, 3.0, 2.0, 6.0]])
+    fig = learning_curve_figure(np.array([2048]), returns)
+    ax = fig.axes[0]
+    ys = np.concatenate([seg[:, 1] for c in ax.collections for seg in c.get_segments()])
+    assert np.isclose(ys.max() - ys.min(), 2 * returns.std())
+    plt.close(fig)
