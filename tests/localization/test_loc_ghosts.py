@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from lrp_gym.config import load_scenario
-from lrp_gym.localization.ghosts import FAR_M, GhostModel
+from lrp_gym.localization.ghosts import _FIRST, _IMAGES, FAR_M, GhostModel
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.radar.channel import KIND_DIRECT, KIND_REFLECTOR_MULTIPATH
 from lrp_gym.radar.sensor import RadarSensor
@@ -14,11 +14,18 @@ from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world import World
 
 
-@pytest.mark.parametrize("scenario", ["ipin2023", "ipin2023-2types"])
+def _spheres():
+    cfg = load_scenario("ipin2023").model_dump()
+    cfg["reflectors"]["types"] = {"A": {"kind": "sphere", "diameter_m": 0.2}}
+    return load_scenario(cfg)
+
+
+@pytest.mark.parametrize("scenario", ["ipin2023", "ipin2023-2types", "spheres"])
 def test_ghost_model_predicts_every_strong_reflector_multipath_of_the_channel(scenario):
     """Every reflector path via the room that the image-source channel produces within 25 dB
-    of the strongest direct return has a ghost of the same range and radial velocity."""
-    cfg = load_scenario(scenario)
+    of the strongest direct return has a ghost of the same range and radial velocity
+    (retro-directive trihedrals, and omnidirectional spheres with all their bistatic pairs)."""
+    cfg = _spheres() if scenario == "spheres" else load_scenario(scenario)
     world = World.from_config(cfg)
     sensor = RadarSensor(world, cfg.radar)
     ghosts = GhostModel(world.room, world.layout, world.mount_height_m)
@@ -43,9 +50,11 @@ def test_a_downward_trihedral_has_no_ceiling_ghost(paper_world):
     ghosts = GhostModel(paper_world.room, paper_world.layout, paper_world.mount_height_m)
     g, _ = ghosts.ranges(np.array([[2.5, 2.5]]))
     m = len(paper_world.layout)
-    same = g[: 5 * m, 0].reshape(5, m)
-    assert np.all(same[4] == FAR_M)  # image 4 is the ceiling's
-    assert np.all(same[:4] < FAR_M)  # the walls' images are in the trihedrals' pattern
+    same = g[: 5 * m, 0].reshape(5, m)  # out and back via the same face, faces in _FIRST order
+    ceiling = [tuple(_IMAGES[a]) for a in _FIRST].index((0, 0, 1))
+    assert np.all(same[ceiling] == FAR_M)
+    walls = np.delete(same, ceiling, axis=0)
+    assert np.all(walls < FAR_M)  # the walls' images are in the trihedrals' pattern
 
 
 def test_ghost_return_is_evidence_for_the_pose_that_predicts_it(paper_world):
