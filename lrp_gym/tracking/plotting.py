@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from lrp_gym.tracking.evaluate import TrackRun
+if TYPE_CHECKING:
+    from lrp_gym.experiments.track_path import TrackRun
 
 
 def plot_track_run(

@@ -1,4 +1,4 @@
-"""Drive a scenario's path through the radar chain and the tracker; score against the truth."""
+"""Drive a scenario's path through the radar chain, the tracker and AMCL; score against the truth."""
 
 from __future__ import annotations
 
@@ -8,6 +8,9 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from lrp_gym.config import ScenarioConfig
+from lrp_gym.localization.factory import make_localizer
+from lrp_gym.localization.pipeline import track_and_localize
+from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.metrics import SwapCounter, per_type_errors_m
@@ -91,9 +94,6 @@ def run_path(
     robot's (noisy) odometry and predicts static points (:mod:`lrp_gym.tracking.motion`),
     else the paper's constant-velocity model.
     """
-    from lrp_gym.localization.factory import make_localizer
-    from lrp_gym.localization.pipeline import track_and_localize
-    from lrp_gym.radar.sensor import RadarSensor
 
     if len(cfg.task.path) < 2:
         raise ValueError("task.path needs at least two waypoints")
