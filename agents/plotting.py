@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from lrp_gym.output import save_figure
+
 
 def trajectory_figure(
     world: Any, true_xy: np.ndarray, est_xy: np.ndarray, waypoints_m: np.ndarray, title: str = ""
@@ -60,6 +62,4 @@ def save_trajectory(
     title: str = "",
 ) -> Path:
     """Write :func:`trajectory_figure` to ``path`` (atomically)."""
-    from lrp_gym.commands._common import save_figure
-
     return save_figure(trajectory_figure(world, true_xy, est_xy, waypoints_m, title), path)

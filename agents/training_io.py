@@ -10,13 +10,15 @@ from typing import Any
 
 import numpy as np
 
+from agents.evaluate import load_ppo
 from lrp_gym.errors import InputError
+from lrp_gym.experiments.episodes import make_eval_env, public, run_episodes
+from lrp_gym.output import save_figure
+from lrp_gym.output import write_json as _write
 
 
 def write_json(path: Path, data: dict[str, Any]) -> Path:
-    """Write JSON atomically (see :func:`lrp_gym.commands._common.write_json`)."""
-    from lrp_gym.commands._common import write_json as _write
-
+    """Write JSON atomically (see :func:`lrp_gym.output.write_json`)."""
     return _write(data, path)
 
 
@@ -26,8 +28,6 @@ def plot_learning_curve(run_dir: str | Path, out_png: str | Path, title: str = "
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from lrp_gym.commands._common import save_figure
 
     npz = Path(run_dir) / "eval" / "evaluations.npz"
     if not npz.is_file():
@@ -70,7 +70,6 @@ def export_model(
     which : {"best", "final"}
         EvalCallback's best model or the model at the end of training.
     """
-    from agents.evaluate import evaluate, load_ppo, make_eval_env, public
     from agents.model_io import find_stats
 
     run_dir, dest = Path(run_dir), Path(dest_dir)
@@ -88,7 +87,7 @@ def export_model(
     env = make_eval_env("ppo", eval_env_id)
     t0 = time.perf_counter()
     policy = load_ppo(dest / f"{name}.zip", (env.observation_space, env.action_space))
-    summary = public(evaluate(policy, env, episodes, seed))
+    summary = public(run_episodes(policy, env, episodes, seed))
     env.close()
     summary.pop("per_episode", None)
     info_path = run_dir / "run_info.json"

@@ -24,8 +24,8 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError
 
-from lrp_gym.radar.fmcw import FmcwParameters
 from lrp_gym.scenario_yaml import load_yaml
+from lrp_gym.waveform import FmcwParameters
 
 
 def _configs_dir() -> Path:

@@ -105,8 +105,8 @@ def _drive(env, seed: int):
     """Run one episode; per-step table rows, (true, estimated) xy arrays and the last info."""
     import numpy as np
 
-    from agents.evaluate import LOCALISED_M
     from agents.pure_pursuit import PurePursuitPolicy
+    from lrp_gym.localization.metrics import LOCALISED_M
 
     policy = PurePursuitPolicy.from_env(env)
     obs, info = env.reset(seed=seed)
@@ -137,7 +137,8 @@ def _drive(env, seed: int):
 def _summary(base, scenario: str, seed: int, tracks, info) -> dict:
     import numpy as np
 
-    from agents.evaluate import LOCALISED_M, cross_track_m
+    from lrp_gym.experiments.episodes import cross_track_m
+    from lrp_gym.localization.metrics import LOCALISED_M
 
     true_xy, est_xy, err = tracks
     n = len(err)

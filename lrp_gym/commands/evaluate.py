@@ -1,4 +1,4 @@
-"""``lrp-gym evaluate``: any agent on fixed seeds, one metrics table (see :mod:`agents.evaluate`)."""
+"""``lrp-gym evaluate``: any agent on fixed seeds, one metrics table (see :mod:`lrp_gym.experiments.episodes`)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import typer
 
 from lrp_gym.commands._common import (
     FIDELITIES,
+    as_flags,
     check_distinct,
     check_output,
     choice,
@@ -107,20 +108,29 @@ def evaluate(
     check_distinct(out_path, gif_path)
     from agents import evaluate as ev
     from lrp_gym.config import deep_merge
+    from lrp_gym.experiments import episodes as ep
 
     over = overrides(scenario, sets, fidelity)
     if task is not None:
         over = deep_merge(over, {"task": {"mode": task}})
-    env_obj = ev.make_eval_env(
-        agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=over or None
-    )
-    policy = ev.make_agent(agent, env_obj, model, seed)
+    with as_flags(env_id="--env"):
+        env_obj = ep.make_eval_env(
+            agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=over or None
+        )
+    with as_flags(model_path="--model", agent="--agent"):
+        policy = ev.make_agent(agent, env_obj, model, seed)
     env_id = env_obj.spec.id if env_obj.spec is not None else env
     cfg = env_obj.unwrapped.cfg
     try:
-        summary = ev.evaluate(
-            policy, env_obj, episodes, seed, gif_path=gif_path, progress=None if json_out else _show
-        )
+        with as_flags(n_episodes="--episodes"):
+            summary = ep.run_episodes(
+                policy,
+                env_obj,
+                episodes,
+                seed,
+                gif_path=gif_path,
+                progress=None if json_out else _show,
+            )
     finally:
         env_obj.close()
     doc = {
@@ -131,7 +141,7 @@ def evaluate(
         "fidelity": cfg.radar.fidelity,
         "sets": list(sets or []),
         "model": str(model or ev.DEFAULT_MODEL) if agent == "ppo" else None,
-        **ev.public(summary),
+        **ep.public(summary),
     }
     if out_path is not None:
         write_json(doc, out_path)

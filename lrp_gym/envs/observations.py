@@ -103,24 +103,34 @@ class EstimatedPoseObservation(ObservationType):
 
     use_truth = False
 
-    def labels(self) -> list[str]:
-        n = self.cfg.n_waypoints
-        wp = [f"wp{i}_{c}" for i in range(1, n + 1) for c in ("dx", "dy")]
-        return [
-            "x_norm",
-            "y_norm",
-            "cos_theta",
-            "sin_theta",
-            "std_x",
-            "std_y",
-            "std_theta",
-            "converged",
-            *wp,
-            "goal_dx",
-            "goal_dy",
-            "last_speed",
-            "last_turn",
-        ]
+    #: Length of the layout without the waypoints (8 pose/std/converged + 2 goal + 2 action).
+    FIXED_LEN = 12
+
+    @staticmethod
+    def fields(n_waypoints: int) -> dict[str, slice]:
+        """Where each named part sits in the flat vector, for ``n_waypoints`` waypoints.
+
+        Keys: ``position``, ``heading``, ``std``, ``converged``, ``waypoints``, ``goal``,
+        ``last_action`` (the table above); consumers read these instead of hard-coding indices.
+        """
+        n2 = 2 * n_waypoints
+        return {
+            "position": slice(0, 2),
+            "heading": slice(2, 4),
+            "std": slice(4, 7),
+            "converged": slice(7, 8),
+            "waypoints": slice(8, 8 + n2),
+            "goal": slice(8 + n2, 10 + n2),
+            "last_action": slice(10 + n2, 12 + n2),
+        }
+
+    @classmethod
+    def n_waypoints_of(cls, length: int) -> int:
+        """Waypoint count of a flat observation of ``length`` values (ValueError if none fits)."""
+        n, rest = divmod(length - cls.FIXED_LEN, 2)
+        if n < 1 or rest:
+            raise ValueError(f"observation: length {length} is not 12 + 2 n_waypoints")
+        return n
 
     @property
     def space(self) -> spaces.Box:

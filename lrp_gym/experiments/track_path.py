@@ -10,8 +10,8 @@ from scipy.optimize import linear_sum_assignment
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.localization.factory import make_localizer
 from lrp_gym.localization.pipeline import track_and_localize
-from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.radar.detections import Detections
+from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.metrics import SwapCounter, per_type_errors_m
 from lrp_gym.tracking.motion import EgoMotion

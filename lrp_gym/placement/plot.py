@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from lrp_gym.placement.ambiguity import AmbiguityResult
+from lrp_gym.placement.scenario import layout_arrays
 
 _MARKERS = ("o", "s", "^", "D", "v", "P")
 
@@ -178,8 +179,6 @@ def _area_legend(result: AmbiguityResult, cmap, excluded: bool, path: bool):
 
 def plot_scenario_map(cfg, result: AmbiguityResult, title: str = ""):
     """:func:`plot_ambiguity_map` for a scenario (room, obstacles, layout and task path)."""
-    from lrp_gym.placement.scenario import layout_arrays
-
     pos, idx, names = layout_arrays(cfg)
     return plot_ambiguity_map(
         result,

@@ -13,6 +13,7 @@ import numpy as np
 
 from lrp_gym.config import ScenarioConfig, load_scenario
 from lrp_gym.radar.channel import Paths
+from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world.world import World
 
 
@@ -40,8 +41,6 @@ def sweep(
     seed: int = 0,
 ) -> dict:
     """Run the sweep; returns per-SNR error std (bins), detection rates and the fitted K."""
-    from lrp_gym.radar.sensor import RadarSensor
-
     cfg = cfg or load_scenario("ipin2023")
     world = World.from_config(cfg)  # only its waveform is used: the paths are synthetic
     sig = RadarSensor(world, cfg.radar.model_copy(update={"fidelity": "signal", "noise": True}))

@@ -21,7 +21,7 @@ import scipy.fft
 from scipy.signal import get_window
 
 from lrp_gym.radar.cfar import Cfar2D
-from lrp_gym.radar.fmcw import FmcwParameters
+from lrp_gym.waveform import FmcwParameters
 
 _WINDOW_NAMES = {"hann": "hann", "hamming": "hamming", "blackman": "blackman", "rect": "boxcar"}
 

@@ -19,6 +19,7 @@ from lrp_gym.radar.antenna import ZenithPattern
 from lrp_gym.radar.cfar import Cfar2D
 from lrp_gym.radar.channel import Channel, Paths
 from lrp_gym.radar.detections import Detections
+from lrp_gym.radar.fast import FastDetectionModel
 from lrp_gym.radar.frontend import beat_cube, link_constant_w_m2, noise_power_w
 from lrp_gym.radar.processing import RangeDopplerProcessor
 from lrp_gym.world.world import World
@@ -86,8 +87,6 @@ class RadarSensor:
         self.last_paths: Paths | None = None
         self._fast = None
         if self.fidelity == "detections":
-            from lrp_gym.radar.fast import FastDetectionModel
-
             self._fast = FastDetectionModel.for_sensor(self)
 
     @property

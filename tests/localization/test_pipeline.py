@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from lrp_gym.experiments.track_path import ego_motions
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.pipeline import track_and_localize
 from lrp_gym.radar.sensor import RadarSensor
-from lrp_gym.experiments.track_path import ego_motions
 from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world.trajectory import path_trajectory
 

@@ -7,8 +7,8 @@ import pytest
 from scipy.ndimage import maximum_filter, rank_filter
 
 from lrp_gym.radar.cfar import Cfar2D
-from lrp_gym.radar.fmcw import FmcwParameters
 from lrp_gym.radar.processing import RangeDopplerProcessor
+from lrp_gym.waveform import FmcwParameters
 
 WINDOWS = [((2, 1), (8, 3)), ((0, 0), (3, 0)), ((1, 1), (4, 2))]
 
