@@ -95,9 +95,7 @@ class RangeDopplerProcessor:
     cfar : Cfar2D
     """
 
-    def __init__(
-        self, fmcw: FmcwParameters, window_name: str = "hann", cfar: Cfar2D | None = None
-    ) -> None:
+    def __init__(self, fmcw: FmcwParameters, window_name: str, cfar: Cfar2D) -> None:
         self.fmcw = fmcw
         ns, nc = fmcw.samples_per_chirp, fmcw.chirps_per_frame
         self.range_table = window_table(window_name, ns)
@@ -105,7 +103,7 @@ class RangeDopplerProcessor:
         self.window2d = np.outer(window(window_name, ns), window(window_name, nc)).astype(
             np.float32
         )
-        self.cfar = cfar or Cfar2D()
+        self.cfar = cfar
         self.coherent_gain2 = (
             self.range_table.coherent_gain * self.doppler_table.coherent_gain
         ) ** 2

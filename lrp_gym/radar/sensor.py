@@ -73,10 +73,7 @@ class RadarSensor:
             ),
             min_power_w=self.min_path_power_w,
         )
-        c = radar.cfar
-        self.cfar = Cfar2D(
-            c.method, tuple(c.guard_cells), tuple(c.training_cells), c.pfa, c.os_rank
-        )
+        self.cfar = Cfar2D.from_config(radar.cfar)
         self.processor = RangeDopplerProcessor(self.fmcw, radar.window, self.cfar)
         #: noise power of one map cell (the noise level in map units, also with noise off)
         self.noise_cell = self.noise_w * self.processor.noise_gain

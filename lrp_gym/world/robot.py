@@ -109,7 +109,7 @@ class DiffDriveLimits:
         Footprint radius used for collision checks.
     """
 
-    max_speed_mps: float = 1.0
-    max_reverse_mps: float = 0.2
-    max_turn_rate_rps: float = np.deg2rad(120.0)
-    radius_m: float = 0.2
+    max_speed_mps: float
+    max_reverse_mps: float
+    max_turn_rate_rps: float
+    radius_m: float
