@@ -31,7 +31,8 @@ def _time_updates(amcl: Amcl, steps, seconds: float, rng, fixed_n: int | None) -
 
 
 def bench_amcl(cfg: ScenarioConfig, seconds: float) -> dict:
-    """Time AMCL updates on true fingerprints along a straight 0.5 m-step drive.
+    """Time AMCL updates on true fingerprints around a loop: 12 poses on a 0.8 m circle about
+    the room centre, heading along the circle (0.41 m and 30 degrees between poses).
 
     Returns
     -------

@@ -116,10 +116,6 @@ class RangeDopplerProcessor:
         """Smallest range separation of two equal targets that the window keeps apart."""
         return self.range_table.resolution_bins * self.fmcw.range_resolution_m
 
-    @property
-    def resolution_cell_mps(self) -> float:
-        return self.doppler_table.resolution_bins * self.fmcw.velocity_resolution_mps
-
     def power_map(self, cube: np.ndarray) -> np.ndarray:
         """Square-law range-Doppler map (N_s x N_c), Doppler fftshifted, in W x gains."""
         spec = scipy.fft.fft2(cube * self.window2d, workers=1, overwrite_x=True)

@@ -419,5 +419,3 @@ class LrpTracker:
             kf.R = self._R
             self._tracks.append(Track(self._next_id, int(ty), kf, float(detections.rcs_dbsm[d])))
             self._next_id += 1
-
-    # ------------------------------------------------------------------ identification

@@ -14,8 +14,6 @@ import numpy as np
 
 from lrp_gym.world.room import Room
 
-N_STRUCTURE_RETURNS = 9
-
 
 def structure_ranges_m(room: Room, mount_height_m: float, xy: np.ndarray) -> np.ndarray:
     """Predicted ranges (9, N) of ceiling, wall-ceiling edges and walls at positions (N, 2)."""
