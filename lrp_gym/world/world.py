@@ -13,7 +13,7 @@ from lrp_gym.world.robot import DiffDriveLimits, OdometryNoise
 from lrp_gym.world.room import Box, Room, Surfaces
 
 if TYPE_CHECKING:
-    # The schema validates against the world's geometry (config_checks), so it sits above it.
+    # The schema validates against the world's geometry (config/checks.py), so it sits above it.
     from lrp_gym.config import ScenarioConfig
 
 

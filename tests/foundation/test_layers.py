@@ -21,9 +21,9 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     # Physical constants and waveform numbers, errors, file output: depend on nothing here.
     ("lrp_gym.errors", "lrp_gym.waveform", "lrp_gym.output", "lrp_gym.scenario_yaml"),
     ("lrp_gym.world",),
-    # The schema checks a scenario against the world's geometry (config_checks), so it sits
+    # The schema checks a scenario against the world's geometry (config/checks.py), so it sits
     # above the world; the world reads a config only as a type (TYPE_CHECKING).
-    ("lrp_gym.config", "lrp_gym.config_checks"),
+    ("lrp_gym.config",),
     ("lrp_gym.radar",),
     ("lrp_gym.tracking",),
     ("lrp_gym.localization",),
