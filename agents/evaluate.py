@@ -23,7 +23,9 @@ DEFAULT_MODEL = MODELS_DIR / "ppo_lrp_nav.zip"
 class RandomPolicy:
     """Uniform random actions from a seeded generator (a lower bound)."""
 
-    def __init__(self, action_space: gym.spaces.Box, rng: np.random.Generator) -> None:
+    def __init__(self, action_space: gym.Space, rng: np.random.Generator) -> None:
+        if not isinstance(action_space, gym.spaces.Box):
+            raise ValueError(f"action_space: random actions need a Box, got {action_space}")
         self.low, self.high = action_space.low, action_space.high
         self.rng = rng
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import typer
 
@@ -31,21 +32,21 @@ AGENT_NAMES = ("pure-pursuit", "ppo", "random", "oracle")
 TASKS = ("path", "goal")
 
 
-def agent_option() -> typer.Option:
+def agent_option() -> Any:
     """``--agent`` (shared with robustness)."""
     return typer.Option(
         "pure-pursuit", "--agent", metavar="NAME", help=f"{' | '.join(AGENT_NAMES)}."
     )
 
 
-def model_option() -> typer.Option:
+def model_option() -> Any:
     """``--model`` (shared with robustness)."""
     return typer.Option(
         None, "--model", metavar="FILE.zip", help="PPO model zip (default: the shipped one)."
     )
 
 
-def env_option() -> typer.Option:
+def env_option() -> Any:
     """``--env``: the Gymnasium env id the agent drives in (shared with robustness)."""
     return typer.Option(
         None,
@@ -56,7 +57,7 @@ def env_option() -> typer.Option:
     )
 
 
-def task_option() -> typer.Option:
+def task_option() -> Any:
     """``--task path|goal`` (shared with robustness)."""
     return typer.Option(
         None,
@@ -67,7 +68,7 @@ def task_option() -> typer.Option:
     )
 
 
-def episodes_option(what: str = "Number of episodes") -> typer.Option:
+def episodes_option(what: str = "Number of episodes") -> Any:
     """``--episodes N`` (shared with robustness, same default)."""
     return typer.Option(20, "--episodes", metavar="N", help=f"{what} (seeds seed, seed+1, ...).")
 
@@ -120,7 +121,7 @@ def evaluate(
     with as_flags(model_path="--model", agent="--agent"):
         policy = ev.make_agent(agent, env_obj, model, seed)
     env_id = env_obj.spec.id if env_obj.spec is not None else env
-    cfg = env_obj.unwrapped.cfg
+    cfg = ep.nav_env(env_obj).cfg
     try:
         with as_flags(n_episodes="--episodes"):
             summary = ep.run_episodes(

@@ -165,7 +165,8 @@ def _print(result: dict, budget: int) -> None:
         return "-" if v is None else (f"{100 * v:.0f} %" if pct else f"{v:.3f}")
 
     e, s = result["episodes"], result["seed"]
-    cols = ("perturbation", "sev.", "success", "coll.", "p50 [m]", "p95 [m]", "localised")
+    cols: tuple[str, ...] = ("perturbation", "sev.", "success", "coll.", "p50 [m]", "p95 [m]")
+    cols += ("localised",)
     cols += ("recovery [frames]", f"recovered <= {budget}")
     t = table(
         f"{result['agent']} on {result['env_id']} ({result['scenario']}, "

@@ -5,7 +5,6 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 from pydantic import (
-    BaseModel,
     Field,
     model_validator,
 )
@@ -19,11 +18,11 @@ Severity = Annotated[float, Field(ge=0, le=1, allow_inf_nan=False)]
 FrameCount = Annotated[int, Field(ge=0, le=100_000)]
 
 
-class _PerturbationBase(Strict):
+class PerturbationConfig(Strict):
     severity: Severity = 0.5
 
 
-class ShadowingConfig(_PerturbationBase):
+class ShadowingConfig(PerturbationConfig):
     """Reflectors hidden for ``frames`` frames by a static obstacle or a walking person."""
 
     mode: Literal["static", "person"] = "static"
@@ -33,38 +32,38 @@ class ShadowingConfig(_PerturbationBase):
     person_size_m: PosVec3 = [0.5, 0.5, 1.8]
 
 
-class MissedDetectionsConfig(_PerturbationBase):
+class MissedDetectionsConfig(PerturbationConfig):
     probability: Fraction | None = None
 
 
-class ClutterConfig(_PerturbationBase):
+class ClutterConfig(PerturbationConfig):
     count: Annotated[int, Field(ge=0, le=10_000)] | None = None
     rcs_spread_db: NonNegFloat = 3.0
 
 
-class DisplacedReflectorConfig(_PerturbationBase):
+class DisplacedReflectorConfig(PerturbationConfig):
     shift_m: NonNegFloat | None = None
     reflectors: Annotated[int, Field(ge=1, le=1000)] = 1
 
 
-class OdometrySlipConfig(_PerturbationBase):
+class OdometrySlipConfig(PerturbationConfig):
     slip: Annotated[float, Field(gt=-1, le=10, allow_inf_nan=False)] | None = None
     heading_bias_dps: Annotated[float, Field(ge=-3600, le=3600, allow_inf_nan=False)] | None = None
 
 
-class KidnappingConfig(_PerturbationBase):
+class KidnappingConfig(PerturbationConfig):
     frames: Annotated[list[FrameCount], Field(min_length=2, max_length=2)] = [5, 15]
     min_jump_m: NonNegFloat | None = None
 
 
-class InterferenceConfig(_PerturbationBase):
+class InterferenceConfig(PerturbationConfig):
     burst_probability: Fraction | None = None
     burst_frames: Annotated[int, Field(ge=1, le=100_000)] = 3
     detections_per_frame: Annotated[int, Field(ge=0, le=10_000)] | None = None
     rcs_spread_db: NonNegFloat = 6.0
 
 
-class IncidenceAngleConfig(_PerturbationBase):
+class IncidenceAngleConfig(PerturbationConfig):
     half_angle_deg: Annotated[float, Field(gt=0, le=180, allow_inf_nan=False)] | None = None
     cutoff_deg: Annotated[float, Field(gt=0, le=180, allow_inf_nan=False)] | None = None
 
@@ -94,6 +93,6 @@ class PerturbationsConfig(Strict):
                 )
         return data
 
-    def active(self) -> dict[str, BaseModel]:
+    def active(self) -> dict[str, PerturbationConfig]:
         """The perturbations that are on, by name."""
         return {k: v for k in type(self).model_fields if (v := getattr(self, k)) is not None}

@@ -82,8 +82,33 @@ class ObservationType:
         raise NotImplementedError
 
 
+class PoseObservation(ObservationType):
+    """Shared content of the pose-based types: the pose (estimate or truth), its spread, the
+    waypoints and goal in the robot frame, and the last action."""
+
+    use_truth = False
+
+    def _parts(self, snap: NavSnapshot):
+        if self.use_truth:
+            pose, std, conv, s = snap.true_pose, np.zeros(3), True, snap.s_true_m
+        else:
+            pose, std, conv, s = snap.est_pose, snap.est_std, snap.converged, snap.s_est_m
+        wps = to_robot_frame(snap.path.upcoming(s, self.cfg.n_waypoints), pose)
+        goal = to_robot_frame(snap.path.goal_m[None, :], pose)[0]
+        r = self.reach_m
+        return (
+            np.clip(pose[:2] / self.room_size_m[:2], -0.5, 1.5),
+            np.array([np.cos(pose[2]), np.sin(pose[2])]),
+            np.minimum(np.nan_to_num(std, nan=5.0), 5.0),
+            float(conv),
+            np.clip(wps, -r, r),
+            np.clip(goal, -r, r),
+            snap.last_action,
+        )
+
+
 @register_observation("estimated")
-class EstimatedPoseObservation(ObservationType):
+class EstimatedPoseObservation(PoseObservation):
     """Flat float32 vector built from the pose *estimate*.
 
     Layout (``n = n_waypoints``):
@@ -100,8 +125,6 @@ class EstimatedPoseObservation(ObservationType):
     last 2      2      previous action
     ==========  =====  =================================================================
     """
-
-    use_truth = False
 
     #: Length of the layout without the waypoints (8 pose/std/converged + 2 goal + 2 action).
     FIXED_LEN = 12
@@ -140,24 +163,6 @@ class EstimatedPoseObservation(ObservationType):
         high = np.array([1.5, 1.5, 1, 1, 5, 5, 5, 1] + [r] * (2 * n + 2) + [1, 1], np.float32)
         return spaces.Box(low, high, dtype=np.float32)
 
-    def _parts(self, snap: NavSnapshot):
-        if self.use_truth:
-            pose, std, conv, s = snap.true_pose, np.zeros(3), True, snap.s_true_m
-        else:
-            pose, std, conv, s = snap.est_pose, snap.est_std, snap.converged, snap.s_est_m
-        wps = to_robot_frame(snap.path.upcoming(s, self.cfg.n_waypoints), pose)
-        goal = to_robot_frame(snap.path.goal_m[None, :], pose)[0]
-        r = self.reach_m
-        return (
-            np.clip(pose[:2] / self.room_size_m[:2], -0.5, 1.5),
-            np.array([np.cos(pose[2]), np.sin(pose[2])]),
-            np.minimum(np.nan_to_num(std, nan=5.0), 5.0),
-            float(conv),
-            np.clip(wps, -r, r),
-            np.clip(goal, -r, r),
-            snap.last_action,
-        )
-
     def observe(self, snap: NavSnapshot) -> np.ndarray:
         xy, cs, std, conv, wps, goal, act = self._parts(snap)
         return np.concatenate([xy, cs, std, [conv], wps.ravel(), goal, act]).astype(np.float32)
@@ -171,7 +176,7 @@ class OraclePoseObservation(EstimatedPoseObservation):
 
 
 @register_observation("dict")
-class DictObservation(EstimatedPoseObservation):
+class DictObservation(PoseObservation):
     """The ``estimated`` content as a Dict space with named parts."""
 
     @property

@@ -19,6 +19,7 @@ import gymnasium as gym
 import numpy as np
 
 import lrp_gym.envs  # noqa: F401  (registers the env ids)
+from lrp_gym.envs.nav_env import LRPRadarNavEnv
 from lrp_gym.localization.metrics import trust_metrics
 
 DEFAULT_ENV = "LRPRadarNav-v0"
@@ -34,6 +35,19 @@ class Policy(Protocol):
     def act(self, observation: Any) -> np.ndarray:
         """The action for one observation (deterministic)."""
         ...
+
+
+def nav_env(env: gym.Env) -> LRPRadarNavEnv:
+    """The LRP env inside ``env``'s wrappers (ValueError naming ``env`` for any other env)."""
+    base = env.unwrapped
+    if not isinstance(base, LRPRadarNavEnv):
+        raise ValueError(f"env: expected an LRPRadarNav env, got {type(base).__name__}")
+    return base
+
+
+def _frame(env: gym.Env) -> np.ndarray:
+    """The env's rendered RGB frame (created with ``render_mode="rgb_array"``)."""
+    return np.asarray(env.render())
 
 
 def make_eval_env(
@@ -107,15 +121,19 @@ def run_episode(
 ) -> EpisodeResult:
     """Run one episode from ``env.reset(seed=seed)``; append rendered frames to ``frames``."""
     obs, info = env.reset(seed=seed)
-    base = env.unwrapped
+    base = nav_env(env)
     dt = float(base.cfg.task.frame_period_s)
+    if base.path is None:  # reset() always sets the path
+        raise RuntimeError("the env has no path after reset")
     waypoints = np.asarray(base.path.waypoints_m, dtype=float)
     true_xy = [np.asarray(info["true_pose"][:2], dtype=float)]
     est_xy = [np.asarray(info["est_pose"][:2], dtype=float)]
-    errors, conv, confidence = [], [], []
+    errors: list[float] = []
+    conv: list[bool] = []
+    confidence: list[float] = []
     ret, collision, success, steps = 0.0, False, False, 0
     if frames is not None:
-        frames.append(env.render())
+        frames.append(_frame(env))
     policy.reset()
     done = False
     while not done:
@@ -132,7 +150,7 @@ def run_episode(
         collision |= bool(info["collision"])
         success |= bool(info["is_success"])
         if frames is not None:
-            frames.append(env.render())
+            frames.append(_frame(env))
     txy = np.asarray(true_xy)
     return EpisodeResult(
         seed=seed,
@@ -220,7 +238,7 @@ def run_episodes(
     for i in range(n_episodes):
         frames: list[np.ndarray] | None = [] if (gif_path is not None and i == 0) else None
         res = run_episode(env, policy, seed + i, frames)
-        if frames:
+        if frames and gif_path is not None:
             write_gif(frames, gif_path, fps=env.metadata.get("render_fps", 4))
         results.append(res)
         if progress is not None:

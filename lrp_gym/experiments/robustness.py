@@ -21,7 +21,8 @@ import gymnasium as gym
 import numpy as np
 
 from lrp_gym.config import PerturbationsConfig, deep_merge
-from lrp_gym.experiments.episodes import Policy, make_eval_env, run_episode, summarize
+from lrp_gym.experiments.episodes import Policy, make_eval_env, nav_env, run_episode, summarize
+from lrp_gym.perturbations.motion import Kidnapping
 
 LOCALISED_M = 0.2
 RECOVERY_BUDGET_FRAMES = 15
@@ -78,9 +79,9 @@ def run_cell(
     for i in range(episodes):
         res = run_episode(env, policy, seed + i)
         results.append(res)
-        pert = env.unwrapped.perturbations
+        pert = nav_env(env).perturbations
         kid = pert.get("kidnapping") if pert is not None else None
-        if kid is not None and kid.kidnap_frame is not None:
+        if isinstance(kid, Kidnapping) and kid.kidnap_frame is not None:
             kidnapped += 1
             recov.append(recovery_frames(res.loc_error_m, kid.kidnap_frame))
         if on_episode is not None:

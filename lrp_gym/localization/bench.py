@@ -16,7 +16,7 @@ from lrp_gym.world.world import World
 def _time_updates(amcl: Amcl, steps, seconds: float, rng, fixed_n: int | None) -> float:
     """Mean milliseconds per update; the particle set is restored to ``fixed_n`` before each."""
     state = (amcl.particles.copy(), amcl.weights.copy())
-    times = []
+    times: list[float] = []
     deadline = time.perf_counter() + seconds
     i = 0
     while time.perf_counter() < deadline or len(times) < 5:

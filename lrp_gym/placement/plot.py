@@ -74,7 +74,7 @@ def plot_ambiguity_map(
     for lo, hi in obstacles or []:
         ax.add_patch(
             Rectangle(
-                lo[:2],
+                (float(lo[0]), float(lo[1])),
                 hi[0] - lo[0],
                 hi[1] - lo[1],
                 facecolor="0.55",

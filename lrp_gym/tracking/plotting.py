@@ -24,7 +24,7 @@ def plot_track_run(
 
     n_types = len(type_names)
     fig, axes = plt.subplots(1, n_types, figsize=(6.5 * n_types, 4), squeeze=False)
-    frames = np.arange(len(run.trajectory))
+    frames = range(len(run.trajectory))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for t, ax in enumerate(axes[0]):
         refl = np.flatnonzero(type_index == t)
