@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 from rich.console import Console
 
-from lrp_gym.commands._common import console, print_json
+from lrp_gym.commands._common import as_flags, console, print_json
 from lrp_gym.errors import InputError
 
 
@@ -93,7 +93,8 @@ def _export(say: Console, run_dir: str, export: Path, episodes: int) -> dict:
     """Ship the run's best model to ``export`` and evaluate it there."""
     from agents.ppo import export_model
 
-    doc = export_model(run_dir, export, episodes=episodes)
+    with as_flags(model_path="--export"):
+        doc = export_model(run_dir, export, episodes=episodes)
     for name in (doc["model"], doc["statistics"], "ppo_lrp_nav.json"):
         _line(say, f"wrote {Path(export) / name}")
     fe = doc["final_eval"]
