@@ -75,10 +75,10 @@ def export_model(
     run_dir, dest = Path(run_dir), Path(dest_dir)
     src = run_dir / ("best/best_model.zip" if which == "best" else "final/model.zip")
     if not src.is_file():
-        raise InputError(f"--export: {src} does not exist (has the run finished?)")
+        raise InputError(f"run_dir: {src} does not exist (has the run finished?)")
     stats = find_stats(src)
     if stats is None:
-        raise InputError(f"--export: {src} has no normalisation statistics beside it")
+        raise InputError(f"run_dir: {src} has no normalisation statistics beside it")
     dest.mkdir(parents=True, exist_ok=True)
     for source, target in ((stats, dest / "vecnormalize.json"), (src, dest / f"{name}.zip")):
         tmp = target.with_name(target.name + ".tmp")

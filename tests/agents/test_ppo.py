@@ -51,7 +51,7 @@ def test_split_hyperparams_follows_zoo_conventions(tmp_path):
 
 
 def test_config_errors(tmp_path):
-    with pytest.raises(InputError, match="--config"):
+    with pytest.raises(ValueError, match="^config: no such file"):
         load_hyperparams(tmp_path / "nope.yaml")
     with pytest.raises(InputError, match="no section"):
         load_hyperparams(tiny_config(tmp_path), "LRPRadarNav-v0")
@@ -125,7 +125,7 @@ def test_smoke_train_save_reload_evaluate_and_resume(tmp_path):
 
 
 def test_resume_without_checkpoint_is_input_error(tmp_path):
-    with pytest.raises(InputError, match="--resume"):
+    with pytest.raises(ValueError, match="^resume: no checkpoint"):
         train(tiny_config(tmp_path), out=tmp_path / "empty", resume=True, progress_bar=False)
 
 

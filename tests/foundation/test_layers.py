@@ -187,8 +187,7 @@ def cli_flag_strings(source: str) -> list[tuple[int, str]]:
     return out
 
 
-#: TODO(issue 15): the training driver and its model/config readers still name flags.
-FLAG_EXCEPTIONS = ("agents.ppo", "agents.ppo_config", "agents.training_io")
+FLAG_EXCEPTIONS: tuple[str, ...] = ()
 
 
 def test_only_the_cli_knows_its_flags():
