@@ -23,32 +23,67 @@ def write_json(path: Path, data: dict[str, Any]) -> Path:
 
 
 def plot_learning_curve(run_dir: str | Path, out_png: str | Path, title: str = "PPO") -> Path:
-    """Mean eval return and success rate against timesteps from ``eval/evaluations.npz``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    """Write the learning curve of a run (:func:`learning_curve_figure`) to ``out_png``."""
     npz = Path(run_dir) / "eval" / "evaluations.npz"
     if not npz.is_file():
         raise InputError(f"no learning curve: {npz} is missing")
     with np.load(npz) as d:
         t, res = d["timesteps"], d["results"]
         succ = d["successes"] if "successes" in d and d["successes"].size else None
+    return save_figure(learning_curve_figure(t, res, succ, title), out_png)
+
+
+def learning_curve_figure(
+    timesteps: np.ndarray,
+    returns: np.ndarray,
+    successes: np.ndarray | None = None,
+    title: str = "PPO",
+) -> Any:
+    """Mean eval return (band: ±1 std over the eval episodes) and success rate against timesteps.
+
+    Parameters
+    ----------
+    timesteps : ndarray, shape (n,)
+        Training steps at each evaluation (EvalCallback's ``timesteps``).
+    returns : ndarray, shape (n, episodes)
+        Return of every eval episode (EvalCallback's ``results``).
+    successes : ndarray, shape (n, episodes), optional
+        1 where the episode reached its goal.
+    title : str
+        Figure title.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t, res, succ = np.asarray(timesteps), np.asarray(returns, float), successes
     fig, ax = plt.subplots(figsize=(6.4, 3.6))
     mean, std = res.mean(axis=1), res.std(axis=1)
-    ax.plot(t, mean, color="C0", marker="o" if len(t) < 3 else None, label="mean eval return")
-    ax.fill_between(t, mean - std, mean + std, color="C0", alpha=0.2)
-    ax.set_xlabel("timesteps")
-    ax.set_ylabel("return", color="C0")
+    n_eval = res.shape[1]
+    marker = "o" if len(t) < 3 else None
+    ax.plot(t, mean, color="C0", marker=marker, label=f"mean return over {n_eval} eval episodes")
+    # The band is the spread of single episodes, not a confidence interval of the mean.
+    band = "mean ± 1 std over episodes"
+    if len(t) > 1:
+        ax.fill_between(t, mean - std, mean + std, color="C0", alpha=0.2, label=band)
+    else:  # one evaluation: a band has no width, so draw it as an error bar
+        ax.errorbar(t, mean, yerr=std, fmt="none", ecolor="C0", alpha=0.5, capsize=6, label=band)
+    ax.set_xlabel("training timesteps [env steps]")
+    ax.set_ylabel("episode return [sum of rewards]", color="C0")
+    handles, labels = ax.get_legend_handles_labels()
+    top = ax  # the legend goes on the upper axes so no curve is drawn over it
     if succ is not None and len(succ) == len(t):
         ax2 = ax.twinx()
-        ax2.plot(t, 100 * succ.mean(axis=1), color="C1", label="success rate")
-        ax2.set_ylabel("success rate [%]", color="C1")
+        ax2.plot(t, 100 * succ.mean(axis=1), color="C1", marker=marker, label="success rate")
+        ax2.set_ylabel(f"success rate [%] ({n_eval} episodes)", color="C1")
         ax2.set_ylim(-5, 105)
+        h2, l2 = ax2.get_legend_handles_labels()
+        handles, labels, top = handles + h2, labels + l2, ax2
+    top.legend(handles, labels, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=3)
     ax.set_title(title)
     ax.grid(alpha=0.3)
-    return save_figure(fig, out_png)
+    return fig
 
 
 def export_model(

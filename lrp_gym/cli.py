@@ -13,8 +13,10 @@ import sys
 
 import typer
 from rich.console import Console
+from typer.core import TyperCommand
 
 from lrp_gym import __version__, commands
+from lrp_gym.commands._common import ScenarioCommand
 from lrp_gym.config import ScenarioError
 from lrp_gym.errors import InputError
 
@@ -57,6 +59,10 @@ def _register_all() -> None:
             continue
         module = importlib.import_module(f"{commands.__name__}.{info.name}")
         module.register(app)
+    for command in app.registered_commands:
+        # positional SCENARIO with a hidden --scenario alias, on every command that has one
+        if command.cls in (None, TyperCommand):
+            command.cls = ScenarioCommand
 
 
 _register_all()

@@ -21,6 +21,7 @@ from typing import Any
 
 import typer
 from rich.console import Console
+from typer.core import TyperArgument, TyperCommand, TyperOption
 
 from lrp_gym.errors import InputError
 from lrp_gym.output import atomic_path, save_figure, to_jsonable, write_json, write_text
@@ -47,6 +48,54 @@ def scenario_argument() -> Any:
         help="Scenario YAML file, or the name of one in configs/scenarios.",
         show_default=True,
     )
+
+
+class ScenarioCommand(TyperCommand):
+    """A command whose positional SCENARIO also answers to a hidden ``--scenario`` option.
+
+    Older scripts wrote ``--scenario NAME``; the option is kept as an alias, hidden from the
+    help, so the grammar stays "SCENARIO is positional". The help shows the argument as
+    ``SCENARIO`` without typer's ``<str>`` type label. The CLI installs this class on every
+    command (:func:`lrp_gym.cli._register_all`); commands without a SCENARIO are unchanged.
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        arg = next((p for p in self.params if p.name == "scenario"), None)
+        if arg is None:
+            return
+        arg.__class__ = _ScenarioArgument
+        self.params.append(
+            TyperOption(
+                param_decls=["--scenario", _ALIAS],
+                type_descriptor=arg.type_descriptor,  # type: ignore[attr-defined]  # typer's
+                default=None,
+                metavar="SCENARIO",
+                hidden=True,
+            )
+        )
+
+    def parse_args(self, ctx: typer.Context, args: list[str]) -> list[str]:  # type: ignore[override]
+        rest = super().parse_args(ctx, args)
+        alias = ctx.params.pop(_ALIAS, None)
+        if alias is not None:
+            source = ctx.get_parameter_source("scenario")
+            given = source is not None and source.name != "DEFAULT"
+            if given and ctx.params["scenario"] != alias:
+                raise InputError(
+                    f"--scenario: SCENARIO given twice ({ctx.params['scenario']!r} and "
+                    f"{alias!r}); give it once, as the positional argument"
+                )
+            ctx.params["scenario"] = alias
+        return rest
+
+
+_ALIAS = "scenario_alias"
+
+
+class _ScenarioArgument(TyperArgument):
+    def display_type_rich(self, ctx: typer.Context) -> str | None:  # type: ignore[override]
+        return None  # the metavar SCENARIO and the help say what it is; no "<str>"
 
 
 def sets_option() -> Any:

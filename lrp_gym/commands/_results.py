@@ -1,8 +1,11 @@
 """The README's results table: one row per command whose JSON is kept in docs/results.
 
-Each row names the ``lrp-gym`` arguments that print its JSON (``--json``), how to state the
-measured value, and, when it has a target, the comparison that decides "missed". Rows without
-a stored JSON keep their typed text, marked "(not regenerated)".
+Each row names the ``lrp-gym`` arguments that print its JSON (``--json``; a row may run several
+commands, e.g. one per seed and method, and then stores the list of their results), how to
+state the measured value, and, when it has a target, the comparison that decides "missed".
+A row too slow to rerun here may read its numbers from a file its own command writes
+(``source``, e.g. the training run's model card). Rows with neither keep their typed text,
+marked "(not regenerated)".
 """
 
 from __future__ import annotations
@@ -12,6 +15,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from lrp_gym.config import CONFIGS_DIR
 
@@ -25,7 +30,11 @@ Data = dict[str, Any]  # key -> the row's stored JSON (its "result")
 
 @dataclass(frozen=True)
 class Row:
-    """One line of the table; ``argv`` None means the row is not rerun by ``lrp-gym report``."""
+    """One line of the table.
+
+    ``argv`` (one command) or ``runs`` (several) are what ``lrp-gym report --rerun`` runs;
+    with neither, the row is not rerun and its numbers come from ``source`` if given.
+    """
 
     key: str
     what: str
@@ -35,6 +44,13 @@ class Row:
     met: Callable[[Any, Data], bool] | None = None
     typed: str = ""
     command: str = ""
+    runs: tuple[tuple[str, ...], ...] = ()
+    source: Path | None = None
+
+    @property
+    def commands(self) -> tuple[tuple[str, ...], ...]:
+        """The argument lists ``lrp-gym report --rerun`` runs for this row (may be empty)."""
+        return (self.argv,) if self.argv is not None else self.runs
 
     @property
     def shown_command(self) -> str:
@@ -79,6 +95,35 @@ def _cells(r: Any, key: str, names: tuple[tuple[str, float], ...]) -> list[float
     ]
 
 
+def _placement(r: Any, _: Data) -> str:
+    by = _by_method(r)
+    return (
+        f"{100 * np.mean(by['random']):.1f} % vs {100 * np.mean(by['optimize']):.1f} % "
+        f"(mean of seeds 0-{len(by['random']) - 1}); optimiser better on "
+        f"{sum(o < q for o, q in zip(by['optimize'], by['random'], strict=True))} of "
+        f"{len(by['random'])}"
+    )
+
+
+def _by_method(r: Any) -> dict[str, list[float]]:
+    out: dict[str, list[float]] = {"random": [], "optimize": []}
+    for run in r:
+        out[run["method"]].append(run["ambiguous_fraction"])
+    return out
+
+
+def _bench_load(r: Any) -> str:
+    """Wall-clock speeds mean little on a busy machine: say how busy it was."""
+    m = r.get("machine")
+    if not m:
+        return ""
+    busy = m["load_avg_1min"] > 0.5 * m["cpus"]
+    return f"; load {m['load_avg_1min']:.1f} on {m['cpus']} cores" + (
+        ", not representative" if busy else ""
+    )
+
+
+PLACEMENT_SEEDS = range(5)
 ROBUST = (("shadowing", 0.25), ("missed_detections", 0.2))
 KIDNAP = (("kidnapping", 0.5), ("kidnapping", 1.0))
 DET = ("--fidelity", "detections")
@@ -143,11 +188,18 @@ ROWS: tuple[Row, ...] = (
     ),
     Row(
         "placement_methods",
-        "ambiguous area: random search vs differential evolution (5 seeds)",
+        "ambiguous area: random search vs differential evolution (5 seeds, 1 type)",
         "optimiser wins",
         None,
+        _placement,
+        lambda r, _: np.mean(_by_method(r)["optimize"]) < np.mean(_by_method(r)["random"]),
         typed="13.4 % vs 9.0 %",
-        command="see [docs/placement.md](docs/placement.md)",
+        command="lrp-gym layout --candidates 500 --types 1 --method random|optimize --seed 0..4",
+        runs=tuple(
+            ("layout", "--candidates", "500", "--types", "1", "--method", m, "--seed", str(s))
+            for s in PLACEMENT_SEEDS
+            for m in ("random", "optimize")
+        ),
     ),
     Row(
         "pp_path",
@@ -190,35 +242,58 @@ ROWS: tuple[Row, ...] = (
     ),
     Row(
         "ppo_training",
-        "PPO training wall time",
+        "PPO training wall time (shipped model; not rerun by `lrp-gym report`: about 20 min "
+        "on 2 cores)",
         "<= 30 min",
         None,
+        lambda r, _: (
+            f"{r['wall_time_s'] / 60:.1f} min for {r['timesteps']:,} steps "
+            f"({r['hyperparams']['n_envs']} subprocess envs; from "
+            "agents/models/ppo_lrp_nav.json)"
+        ),
+        lambda r, _: r["wall_time_s"] <= 30 * 60,
         typed="19.6 min for 300k steps (2 subprocess envs)",
-        command="lrp-gym train --config configs/ppo.yaml --out runs/ppo-main --seed 0 --export agents/models",
+        command="lrp-gym train --out runs/ppo-main --seed 0 --export agents/models",
+        source=ROOT / "agents" / "models" / "ppo_lrp_nav.json",
     ),
     Row(
         "bench_radar",
         "radar signal chain (channel + cube + FFT + CFAR), one core",
         ">= 1000 frames/s",
-        None,
+        ("bench", "-c", "radar"),
+        lambda r, _: (
+            f"{r['radar_frames_per_s']:.0f} frames/s; detections fidelity "
+            f"{r['radar_fast_frames_per_s']:.0f}{_bench_load(r)}"
+        ),
+        lambda r, _: r["radar_frames_per_s"] >= 1000,
         typed="935-1037 frames/s over two runs; detections fidelity 1850 (missed on one run)",
-        command="lrp-gym bench -c radar",
     ),
     Row(
         "bench_amcl",
         "AMCL update, 10000 particles / converged count",
         "<= 1.5 / 0.3 ms",
-        None,
+        ("bench", "-c", "amcl"),
+        lambda r, _: (
+            f"{r['amcl_update_ms_10000']:.1f} / {r['amcl_update_ms_converged']:.2f} ms "
+            f"({r['amcl_converged_particles']} particles){_bench_load(r)}"
+        ),
+        lambda r, _: r["amcl_update_ms_10000"] <= 1.5 and r["amcl_update_ms_converged"] <= 0.3,
         typed="3.6 / 1.3 ms (missed; 1.1 / 0.42 ms without the structure term)",
-        command="lrp-gym bench -c amcl",
     ),
     Row(
         "bench_env",
         "`LRPRadarNav-v0` / `LRPRadarNavFast-v0` steps/s (converged)",
         ">= 500 / 3000",
-        None,
+        ("bench", "-c", "env"),
+        lambda r, _: (
+            f"{r['variants']['LRPRadarNav-v0']['steps_per_s']:.0f} / "
+            f"{r['variants']['LRPRadarNavFast-v0']['steps_per_s']:.0f}{_bench_load(r)}"
+        ),
+        lambda r, _: (
+            r["variants"]["LRPRadarNav-v0"]["steps_per_s"] >= 500
+            and r["variants"]["LRPRadarNavFast-v0"]["steps_per_s"] >= 3000
+        ),
         typed="440 / 510-520 (missed)",
-        command="lrp-gym bench -c env",
     ),
     Row(
         "robustness_shadowing_missed",
@@ -270,6 +345,8 @@ def load_results(directory: Path = RESULTS_DIR) -> Data:
         f = directory / f"{row.key}.json"
         if f.is_file():
             out[row.key] = json.loads(f.read_text(encoding="utf-8"))["result"]
+        elif row.source is not None and row.source.is_file():
+            out[row.key] = json.loads(row.source.read_text(encoding="utf-8"))
     return out
 
 

@@ -8,16 +8,19 @@ import typer
 
 from lrp_gym.commands._common import (
     at_least,
+    check_distinct,
     check_output,
     console,
     force_option,
     json_option,
     load_config,
+    out_option,
     plot_option,
     print_json,
     save_figure,
     scenario_argument,
     sets_option,
+    write_json,
     wrote,
 )
 
@@ -46,6 +49,7 @@ def ambiguity(
         None, "--grid", metavar="METRES", help="Grid cell size [m] (default placement.grid_m)."
     ),
     sets: list[str] = sets_option(),
+    out: str | None = out_option("the figures as JSON"),
     plot: str = plot_option("the ambiguity map"),
     force: bool = force_option(),
     json_out: bool = json_option("the figures"),
@@ -59,7 +63,9 @@ def ambiguity(
     from lrp_gym.placement.scenario import analyse_scenario
 
     at_least(grid_m, 1e-6, "--grid")
+    out_path = check_output(out, "--out", force, (".json",))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
+    check_distinct(out_path, plot_path)
     cfg = load_config(scenario, sets)
     start = time.perf_counter()
     result = analyse_scenario(cfg, grid_m)
@@ -69,13 +75,16 @@ def ambiguity(
 
         save_figure(plot_scenario_map(cfg, result), plot_path)
         summary["plot"] = str(plot_path)
+    if out_path is not None:
+        write_json(summary, out_path)
     if json_out:
         print_json(summary)
     else:
         print_summary(summary)
         console.print(f"analysed in {summary['elapsed_s']:.2f} s")
-    if plot_path is not None:
-        wrote(plot_path, quiet=json_out)
+    for p in (plot_path, out_path):
+        if p is not None:
+            wrote(p, quiet=json_out)
 
 
 def register(app: typer.Typer) -> None:

@@ -9,13 +9,18 @@ from rich.table import Table
 
 from lrp_gym.commands._common import (
     at_least,
+    check_output,
     choice,
     console,
+    force_option,
     json_option,
     load_config,
+    out_option,
     print_json,
     scenario_argument,
     sets_option,
+    write_json,
+    wrote,
 )
 
 # component -> (module, function); each function takes (scenario_config, seconds) -> dict
@@ -40,23 +45,30 @@ def bench(
         3.0, "--seconds", metavar="SECONDS", help="Measuring time per figure [s] (>= 0.1)."
     ),
     sets: list[str] = sets_option(),
+    out: str | None = out_option("the figures as JSON"),
+    force: bool = force_option(),
     json_out: bool = json_option("the figures"),
 ) -> None:
     """Measure speed on one core: radar frames/s, AMCL update time, env steps/s."""
     at_least(seconds, 0.1, "--seconds")
     choice(component, (*COMPONENTS, "all"), "--component")
     names = list(COMPONENTS) if component == "all" else [component]
+    out_path = check_output(out, "--out", force, (".json",))
     cfg = load_config(scenario, sets)
     _pin_to_one_core()
-    results: dict = {}
+    results: dict = {"machine": _machine()}
     for name in names:
         module, func = COMPONENTS[name]
         fn = getattr(importlib.import_module(module), func)
         if not json_out:
             console.print(f"[dim]benchmarking {name} ...[/]")
         results.update(fn(cfg, seconds))
+    if out_path is not None:
+        write_json(results, out_path)
     if json_out:
         print_json(results)
+        if out_path is not None:
+            wrote(out_path, quiet=True)
         return
     table = Table(title="lrp-gym benchmark (one core; units in the figure names)")
     table.add_column("figure")
@@ -71,6 +83,16 @@ def bench(
 
     rows("", results)
     console.print(table)
+    if out_path is not None:
+        wrote(out_path)
+
+
+def _machine() -> dict:
+    """CPU count and load before the run: speeds from a busy machine are not comparable."""
+    import os
+
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    return {"cpus": os.cpu_count(), "load_avg_1min": load}
 
 
 def _pin_to_one_core() -> None:

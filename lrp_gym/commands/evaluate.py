@@ -19,7 +19,9 @@ from lrp_gym.commands._common import (
     json_option,
     out_option,
     overrides,
+    plot_option,
     print_json,
+    save_figure,
     scenario_argument,
     seed_option,
     sets_option,
@@ -97,6 +99,10 @@ def evaluate(
     gif: Path = typer.Option(
         None, "--gif", metavar="FILE.gif", help="Write the first episode as an animated GIF."
     ),
+    plot: Path = plot_option(
+        "the reliability diagram of the localisation confidence (share of steps localised "
+        "per confidence bin)"
+    ),
     force: bool = force_option(),
     json_out: bool = json_option("the metrics"),
 ) -> None:
@@ -106,7 +112,8 @@ def evaluate(
     choice(fidelity, FIDELITIES, "--fidelity")
     out_path = check_output(out, "--out", force, (".json",))
     gif_path = check_output(gif, "--gif", force, (".gif",))
-    check_distinct(out_path, gif_path)
+    plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
+    check_distinct(out_path, gif_path, plot_path)
     from agents import evaluate as ev
     from lrp_gym.config import deep_merge
     from lrp_gym.experiments import episodes as ep
@@ -146,12 +153,19 @@ def evaluate(
     }
     if out_path is not None:
         write_json(doc, out_path)
+    title = (
+        f"{agent} on {env_id} ({scenario}, {cfg.task.mode}), seeds {seed}..{seed + episodes - 1}"
+    )
     if json_out:
         print_json(doc)
     else:
-        title = f"{agent} on {env_id} ({scenario}, {cfg.task.mode}), seeds {seed}..{seed + episodes - 1}"
         console.print(ev.summary_table(summary, title=title))
-    for p in (gif_path, out_path):
+    if plot_path is not None:
+        from lrp_gym.localization.plotting import plot_reliability
+
+        fig = plot_reliability(summary["reliability"], title=f"Confidence reliability: {title}")
+        save_figure(fig, plot_path)
+    for p in (gif_path, out_path, plot_path):
         if p is not None:
             wrote(p, quiet=json_out)
 

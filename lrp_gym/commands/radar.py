@@ -8,6 +8,7 @@ import typer
 from lrp_gym.commands._common import (
     FIDELITIES,
     at_least,
+    check_distinct,
     check_output,
     choice,
     console,
@@ -15,6 +16,7 @@ from lrp_gym.commands._common import (
     force_option,
     json_option,
     load_config,
+    out_option,
     plot_option,
     print_json,
     save_figure,
@@ -22,6 +24,7 @@ from lrp_gym.commands._common import (
     seed_option,
     sets_option,
     table,
+    write_json,
     wrote,
 )
 from lrp_gym.errors import InputError
@@ -40,6 +43,7 @@ def radar(
     ),
     seed: int = seed_option("Seed of the thermal noise."),
     sets: list[str] = sets_option(),
+    out: str | None = out_option("the detections and true distances as JSON"),
     plot: str | None = plot_option("the range-Doppler map"),
     force: bool = force_option(),
     json_out: bool = json_option("the detections and true distances"),
@@ -52,7 +56,9 @@ def radar(
     from lrp_gym.radar.sensor import RadarSensor
 
     at_least(velocity, -float("inf"), "--velocity")
+    out_path = check_output(out, "--out", force, (".json",))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
+    check_distinct(out_path, plot_path)
     cfg = load_config(scenario, sets)
     world = World.from_config(cfg)
     p = np.asarray(pose, float)
@@ -79,11 +85,20 @@ def radar(
             title=f"{cfg.name} at ({p[0]:g} m, {p[1]:g} m, {p[2]:g} rad)",
         )
         save_figure(fig, plot_path)
-        wrote(plot_path, quiet=json_out)
     records = [{k: r[k] for k in DETECTION_KEYS} for r in det.to_records()]
+    doc = {"true_lrp_distances_m": true, "detections": records}
+    if out_path is not None:
+        write_json(doc, out_path)
     if json_out:
-        print_json({"true_lrp_distances_m": true, "detections": records})
-        return
+        print_json(doc)
+    else:
+        _print_frame(det, records, true)
+    for path in (plot_path, out_path):
+        if path is not None:
+            wrote(path, quiet=json_out)
+
+
+def _print_frame(det, records: list[dict], true: np.ndarray) -> None:
     cols = ("range [m]", "velocity [m/s]", "power [dBm]", "RCS [dBsm]", "SNR [dB]")
     t = table(f"{len(det)} detections", cols)
     for r in records:
@@ -101,6 +116,8 @@ def radar_rate(
     seed: int = seed_option("Seed of the poses and the noise."),
     fidelity: str | None = fidelity_option(),
     sets: list[str] = sets_option(),
+    out: str | None = out_option("the rates as JSON"),
+    force: bool = force_option(),
     json_out: bool = json_option(),
 ) -> None:
     """How often the radar delivers each LRP: detected within 10 cm with an RCS inside the
@@ -110,11 +127,17 @@ def radar_rate(
     if poses < 1:
         raise InputError(f"--poses: must be at least 1, got {poses}")
     choice(fidelity, FIDELITIES, "--fidelity")
+    out_path = check_output(out, "--out", force, (".json",))
     cfg = load_config(scenario, sets, fidelity)
     res = lrp_detection_rate(cfg, poses, seed)
     fid = cfg.radar.fidelity
+    doc = {"scenario": cfg.name, "fidelity": fid, **res.as_dict()}
+    if out_path is not None:
+        write_json(doc, out_path)
     if json_out:
-        print_json({"scenario": cfg.name, "fidelity": fid, **res.as_dict()})
+        print_json(doc)
+        if out_path is not None:
+            wrote(out_path, quiet=True)
         return
     console.print(f"{cfg.name}, {fid} radar, {poses} poses, seed {seed}:", markup=False)
     t = table("delivered per LRP", ("LRP", "type", "delivered"))
@@ -128,6 +151,8 @@ def radar_rate(
         f"{res.mean_detections:.1f} detections/frame",
         markup=False,
     )
+    if out_path is not None:
+        wrote(out_path)
 
 
 def register(app: typer.Typer) -> None:

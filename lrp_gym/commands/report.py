@@ -30,7 +30,7 @@ def report(
     Each row's numbers and its "missed" mark come from the JSON its command printed; rows
     without a stored JSON keep their typed text, marked "(not regenerated)".
     """
-    runnable = [r.key for r in res.ROWS if r.argv is not None]
+    runnable = [r.key for r in res.ROWS if r.commands]
     keys = runnable
     if only is not None:
         keys = [k.strip() for k in only.split(",") if k.strip()]
@@ -59,20 +59,26 @@ def report(
 
 
 def _rerun(row: res.Row) -> None:
-    argv = [*(row.argv or ()), "--json"]
-    err_console.print(f"running lrp-gym {' '.join(argv)}", highlight=False, markup=False)
     start = time.perf_counter()
-    proc = subprocess.run(
-        [sys.executable, "-m", "lrp_gym.cli", *argv], capture_output=True, text=True, check=False
-    )
-    if proc.returncode != 0:
-        raise InputError(
-            f"{row.key}: lrp-gym {' '.join(argv)} failed: {proc.stderr.strip()[-300:]}"
+    commands, results = [], []
+    for args in row.commands:
+        argv = [*args, "--json"]
+        commands.append("lrp-gym " + " ".join(argv))
+        err_console.print(f"running {commands[-1]}", highlight=False, markup=False, soft_wrap=True)
+        proc = subprocess.run(
+            [sys.executable, "-m", "lrp_gym.cli", *argv],
+            capture_output=True,
+            text=True,
+            check=False,
         )
+        if proc.returncode != 0:
+            raise InputError(f"{row.key}: {commands[-1]} failed: {proc.stderr.strip()[-300:]}")
+        results.append(json.loads(proc.stdout))
+    several = row.argv is None  # a row of several runs stores the list of their results
     doc = {
-        "command": "lrp-gym " + " ".join(argv),
+        "command": commands if several else commands[0],
         "elapsed_s": round(time.perf_counter() - start, 1),
-        "result": json.loads(proc.stdout),
+        "result": results if several else results[0],
     }
     wrote(write_json(doc, res.RESULTS_DIR / f"{row.key}.json"))
 

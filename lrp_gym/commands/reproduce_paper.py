@@ -164,7 +164,7 @@ def reproduce_paper(
         rooms_over = deep_merge(parse_sets(sets, scenario), {"radar": {"noise": noise}})
         if particles is not None:
             rooms_over = deep_merge(rooms_over, _particles(particles, 200))
-        _random_rooms(random_rooms, runs, seed, rooms_over, estimator, out_path)
+        _random_rooms(random_rooms, runs, seed, rooms_over, estimator, out_path, json_out)
         return
     cfg = load_config(scenario, sets, fidelity)
     over: dict = {"radar": {"noise": noise}}
@@ -263,8 +263,11 @@ def _particles(n: int, min_particles: int) -> dict:
     }
 
 
-def _random_rooms(n: int, runs: int, seed: int, over: dict, estimator: str, json_path) -> None:
-    """``--random-rooms``: the generated-room baseline, one line per room as it finishes."""
+def _random_rooms(
+    n: int, runs: int, seed: int, over: dict, estimator: str, json_path, json_out: bool
+) -> None:
+    """``--random-rooms``: the generated-room baseline, one line per room as it finishes
+    (on stderr; with ``--json`` the summary goes to stdout as JSON instead of the table)."""
     from lrp_gym.experiments.rooms import summary, sweep
 
     def progress(r) -> None:
@@ -279,6 +282,13 @@ def _random_rooms(n: int, runs: int, seed: int, over: dict, estimator: str, json
         range(n), runs=runs, run_seed=seed, overrides=over, estimator=estimator, progress=progress
     )
     data = summary(results)
+    if json_path:
+        write_json(data, json_path)
+    if json_out:
+        print_json(data)
+        if json_path:
+            wrote(json_path, quiet=True)
+        return
     t = table(
         f"AMCL mean error on {n} generated rooms ({runs} runs each)",
         ("room", "size [m]", "obst.", "refl.", "kinds", "frames", "radar [m]", "true fp [m]"),
@@ -301,7 +311,6 @@ def _random_rooms(n: int, runs: int, seed: int, over: dict, estimator: str, json
         highlight=False,
     )
     if json_path:
-        write_json(data, json_path)
         wrote(json_path)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
+from rich import box
 
 from lrp_gym.commands._common import (
     FIDELITIES,
@@ -165,15 +166,17 @@ def _print(result: dict, budget: int) -> None:
         return "-" if v is None else (f"{100 * v:.0f} %" if pct else f"{v:.3f}")
 
     e, s = result["episodes"], result["seed"]
-    cols: tuple[str, ...] = ("perturbation", "sev.", "success", "coll.", "p50 [m]", "p95 [m]")
-    cols += ("localised",)
-    cols += ("recovery [frames]", f"recovered <= {budget}")
+    # Two-line headers and no vertical rules: the nine columns fit 80 columns unfolded.
+    cols: tuple[str, ...] = ("perturbation", "sev.", "success", "coll.", "p50\n[m]", "p95\n[m]")
+    cols += ("localised", "recov.\n[frames]", f"recov.\n<= {budget}")
     t = table(
         f"{result['agent']} on {result['env_id']} ({result['scenario']}, "
         f"{result['task'] or 'its task'}), {e} episodes/cell, seeds {s}..{s + e - 1}",
         cols,
         left=1,
     )
+    t.box, t.padding, t.pad_edge = box.SIMPLE_HEAD, (0, 0), False
+    t.columns[0].no_wrap = True  # perturbation names stay whole (missed_detections)
     for c in result["cells"]:
         t.add_row(
             c["perturbation"],
@@ -187,6 +190,11 @@ def _print(result: dict, budget: int) -> None:
             f(c["recovered_within_budget"], True),
         )
     console.print(t)
+    console.print(
+        "p50, p95: localisation error percentiles; localised: share of steps within 0.2 m; "
+        f"recov.: frames to recover after a kidnap, and the share recovered within {budget}.",
+        highlight=False,
+    )
 
 
 def register(app: typer.Typer) -> None:

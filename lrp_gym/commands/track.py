@@ -7,6 +7,7 @@ import typer
 
 from lrp_gym.commands._common import (
     FIDELITIES,
+    check_distinct,
     check_output,
     choice,
     console,
@@ -14,6 +15,7 @@ from lrp_gym.commands._common import (
     force_option,
     json_option,
     load_config,
+    out_option,
     plot_option,
     print_json,
     save_figure,
@@ -21,6 +23,7 @@ from lrp_gym.commands._common import (
     seed_option,
     sets_option,
     table,
+    write_json,
     wrote,
 )
 from lrp_gym.errors import InputError
@@ -47,6 +50,7 @@ def track(
         "--ego/--no-ego",
         help="Predict static points from the odometry (else the paper's constant-velocity model).",
     ),
+    out: str | None = out_option("the summary as JSON"),
     plot: str | None = plot_option("true, detected and tracked distances per reflector"),
     force: bool = force_option(),
     json_out: bool = json_option("the summary"),
@@ -61,7 +65,9 @@ def track(
     from lrp_gym.experiments.track_path import run_path
 
     choice(fidelity, FIDELITIES, "--fidelity")
+    out_path = check_output(out, "--out", force, (".json",))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
+    check_distinct(out_path, plot_path)
     cfg = load_config(scenario, sets, fidelity)
     if len(cfg.task.path) < 2:
         raise InputError(f"SCENARIO: {scenario}: task.path needs at least two waypoints to drive")
@@ -74,12 +80,15 @@ def track(
         s = run.summary
         title = f"tracked RMSE {s['tracked_rmse_m']:.3f} m, raw {s['raw_rmse_m']:.3f} m"
         save_figure(plot_track_run(run, layout.type_names, layout.type_index, title), plot_path)
+    if out_path is not None:
+        write_json(run.summary, out_path)
     if json_out:
         print_json(run.summary)
     else:
         _print(cfg, run)
-    if plot_path is not None:
-        wrote(plot_path, quiet=json_out)
+    for p in (plot_path, out_path):
+        if p is not None:
+            wrote(p, quiet=json_out)
 
 
 def _print(cfg, run) -> None:

@@ -15,20 +15,26 @@ def train(
     config: Path = typer.Option(
         None,
         "--config",
+        metavar="FILE.yaml",
         help="Zoo-style hyperparameter YAML (default: the shipped configs/ppo.yaml).",
     ),
     env: str = typer.Option(
-        None, "--env", help="Env id (section of the config); default: its first section."
+        None,
+        "--env",
+        metavar="ENV_ID",
+        help="Env id (section of the config); default: its first section.",
     ),
     timesteps: int = typer.Option(
         None,
         "--timesteps",
+        metavar="N",
         help="Total env steps (overrides n_timesteps), rounded up to whole PPO rollouts of "
         "n_steps x n_envs.",
     ),
     out: Path = typer.Option(
         None,
         "--out",
+        metavar="FOLDER",
         help="Run folder: checkpoints, best and final model, learning curve, run_info.json "
         "(default runs/ppo-<env>-s<seed>).",
     ),
@@ -40,7 +46,7 @@ def train(
     force: bool = typer.Option(
         False, "--force", help="Overwrite the outputs of an earlier run in --out."
     ),
-    seed: int = typer.Option(0, "--seed", help="Seed of torch, numpy and the envs."),
+    seed: int = typer.Option(0, "--seed", metavar="N", help="Seed of torch, numpy and the envs."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
     json_out: bool = typer.Option(
         False, "--json", help="Print the run info as JSON to stdout (messages go to stderr)."
@@ -48,11 +54,13 @@ def train(
     export: Path = typer.Option(
         None,
         "--export",
+        metavar="FOLDER",
         help="After training, ship the best model (+ statistics, + eval JSON) to this folder.",
     ),
     export_episodes: int = typer.Option(
         50,
         "--export-episodes",
+        metavar="N",
         help="Episodes of the shipped model's final eval on LRPRadarNav-v0.",
     ),
 ) -> None:
@@ -131,4 +139,4 @@ def _report(say: Console, info: dict) -> None:
 
 
 def register(app: typer.Typer) -> None:
-    app.command("train")(train)
+    app.command("train", short_help="Train PPO; safe to interrupt and resume.")(train)

@@ -6,13 +6,18 @@ import numpy as np
 import typer
 
 from lrp_gym.commands._common import (
+    check_output,
     console,
+    force_option,
     json_option,
     load_config,
+    out_option,
     print_json,
     scenario_argument,
     sets_option,
     table,
+    write_json,
+    wrote,
 )
 from lrp_gym.world import World
 
@@ -20,16 +25,23 @@ from lrp_gym.world import World
 def validate(
     scenario: str = scenario_argument(),
     sets: list[str] = sets_option(),
+    out: str | None = out_option("the derived numbers as JSON"),
+    force: bool = force_option(),
     json_out: bool = json_option("the derived numbers"),
 ) -> None:
     """Validate SCENARIO and print the room, the reflectors and the derived radar numbers.
 
     Invalid scenarios print one line per problem, naming the field, and exit with code 2.
     """
+    out_path = check_output(out, "--out", force, (".json",))
     cfg = load_config(scenario, sets)
     world = World.from_config(cfg)
+    if out_path is not None:
+        write_json(_as_dict(cfg, world), out_path)
     if json_out:
         print_json(_as_dict(cfg, world))
+        if out_path is not None:
+            wrote(out_path, quiet=True)
         return
     console.print(f"[bold green]valid[/] scenario [bold]{cfg.name}[/]  {cfg.description}")
     lx, ly, lz = cfg.room.size
@@ -55,6 +67,8 @@ def validate(
         console.print(f"task: follow a {len(path)}-waypoint path, {length:.2f} m long")
     else:
         console.print("task: sampled start poses and goals")
+    if out_path is not None:
+        wrote(out_path)
 
 
 def _as_dict(cfg, world: World) -> dict:

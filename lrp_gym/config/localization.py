@@ -49,6 +49,11 @@ class LocalizationConfig(Strict):
     )
     clutter_probability: Fraction = 0.2
     structure_probability: Fraction = 0.6
+    ghost_probability: Fraction = Field(
+        default=0.1,
+        description="probability that a measured distance is a reflector seen via a wall or "
+        "the ceiling (its image source); with structure_probability at most 1",
+    )
     doppler_std_mps: NonNegFloat = Field(
         default=0.15,
         description="std of a return's measured radial velocity in AMCL's likelihood (heading "
@@ -99,5 +104,11 @@ class LocalizationConfig(Strict):
                 "particles",
                 "min_particles ({a}) must not exceed max_particles ({b})",
                 {"a": self.min_particles, "b": self.max_particles},
+            )
+        if self.structure_probability + self.ghost_probability > 1.0:
+            raise PydanticCustomError(
+                "mixture",
+                "structure_probability ({a}) + ghost_probability ({b}) must not exceed 1",
+                {"a": self.structure_probability, "b": self.ghost_probability},
             )
         return self

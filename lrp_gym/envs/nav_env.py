@@ -1,14 +1,13 @@
 """``LRPRadarNav-v0``: drive a robot that localises itself with an FMCW radar and passive LRPs.
 
 Each step applies the action to the differential-drive robot (true pose, collisions), produces
-noisy odometry, runs one radar frame (signal-level or detections fidelity), the LRP tracker and
-AMCL, and builds the observation from the *estimate*. The reward uses the true pose: it is the
-task's score, not something the agent observes.
+noisy odometry, runs one frame of the localisation stack (:mod:`lrp_gym.localization.stack`:
+radar, LRP tracker, AMCL) and builds the observation from the *estimate*. The reward uses the
+true pose: it is the task's score, not something the agent observes.
 """
 
 from __future__ import annotations
 
-from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
@@ -20,14 +19,15 @@ from lrp_gym.config import ScenarioConfig, load_scenario
 from lrp_gym.envs.observations import NavSnapshot, make_observation
 from lrp_gym.envs.task import WaypointPath, sample_goal_task
 from lrp_gym.localization.estimate import PoseEstimate
-from lrp_gym.localization.factory import make_localizer
+from lrp_gym.localization.factory import Localizer
 from lrp_gym.localization.lut import LookupTable
-from lrp_gym.localization.pipeline import track_and_localize
+from lrp_gym.localization.stack import FrameResult, LocalizationStack
 from lrp_gym.perturbations import FrameContext, PerturbationSet
+from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
-from lrp_gym.tracking.motion import EgoMotion
+from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.tracker import LrpTracker
-from lrp_gym.world import World, integrate_unicycle, odometry_delta, wrap_angle
+from lrp_gym.world import World, integrate_unicycle, noisy_odometry, wrap_angle
 
 # Progress is searched for in a window around the last value so it cannot jump along the path.
 _PROGRESS_BACK_M = 1.0
@@ -61,14 +61,69 @@ def build_config(
 
 
 class LRPRadarNavEnv(gym.Env):
-    """Closed-loop navigation on the radar/AMCL pose estimate.
+    """Drive a robot to a goal on the pose it estimates from a 60 GHz radar and passive LRPs.
+
+    The robot (a differential drive in a room with obstacles) never sees its true pose: every
+    frame its radar measures the distances to the retroreflectors, an LRP tracker identifies
+    them, AMCL turns them and the noisy wheel odometry into a pose estimate, and the agent acts
+    on that estimate. Registered as ``LRPRadarNav-v0`` (signal-level radar),
+    ``LRPRadarNavFast-v0`` (detections-level radar) and ``LRPRadarNavOracle-v0`` (observation
+    from the true pose, an ablation); see :mod:`lrp_gym.envs`.
+
+    **Action space**: ``Box(-1, 1, (2,), float32)``, (forward speed, turn rate) as fractions
+    of ``robot.max_speed_mps`` (``robot.max_reverse_mps`` when negative) and
+    ``robot.max_turn_rate_rps``; held for one frame of ``task.frame_period_s``.
+
+    **Observation space** (``env.observation.type``, ``n = env.observation.n_waypoints``):
+    ``estimated`` (default) is a float32 vector of ``8 + 2n + 4`` values built from the
+    estimate only (:class:`~lrp_gym.envs.observations.EstimatedPoseObservation`):
+
+    ==========  =====  ==============================================================
+    index       count  content
+    ==========  =====  ==============================================================
+    0-1         2      estimated x / Lx, y / Ly (0..1 inside the room)
+    2-3         2      cos, sin of the estimated heading
+    4-6         3      std of x, y (m) and heading (rad), capped at 5
+    7           1      1.0 once localisation has converged, else 0.0
+    8..8+2n     2n     next n waypoints (dx, dy) in the estimated robot frame (m)
+    8+2n..+2    2      goal (dx, dy) in the estimated robot frame (m)
+    last 2      2      previous action
+    ==========  =====  ==============================================================
+
+    ``oracle``: the same layout from the true pose (zero std, converged); ``dict``: the
+    ``estimated`` content as a ``Dict`` space (``pose``, ``pose_std``, ``converged``,
+    ``waypoints``, ``goal``, ``last_action``).
+
+    **Rewards** (weights ``task.rewards``), from the *true* pose: ``progress`` times the
+    metres gained along the path (projection searched near the last one, so it cannot jump),
+    ``-time`` per step, ``-collision`` on a collision and ``+goal`` on reaching the goal. Their
+    split is ``info["rewards"]``.
+
+    **Starting state**: ``task.mode: goal`` (the default without a scenario) draws a free
+    start, a goal ``task.goal.min_distance_m`` to ``max_distance_m`` away with a free path
+    (straight, or through one via point) and a heading within 90 degrees of the first leg;
+    ``path`` starts at ``robot.start_pose`` on ``task.path``. The localiser starts spread over
+    the room (``localization.init: uniform``, global localisation) or around the true pose
+    (``gaussian``). The first radar frame is taken at reset.
+
+    **Episode end**: terminated on a collision (the motion is checked in ``env.substeps``
+    sub-steps; the robot stops at the last free one) or when the goal is reached (within
+    ``task.goal_tolerance_m`` and with the path's progress within two tolerances of its
+    end). Truncated after ``MAX_EPISODE_STEPS = 200`` steps by the ``TimeLimit`` wrapper that
+    ``gym.make`` adds (registration in :mod:`lrp_gym.envs`); the class itself never
+    truncates.
+
+    **Info**: true and estimated pose, position and heading errors, pose std, particles, ESS,
+    detections, convergence, confidence, modes, progress, path length, ``collision``,
+    ``is_success`` and the reward terms.
 
     Parameters
     ----------
     scenario : path, scenario name, dict or ScenarioConfig, optional
         Default: the paper room (``ipin2023``) with a sampled start and goal per episode.
     overrides : dict, optional
-        Nested config overrides, e.g. ``{"radar": {"noise": False}}``.
+        Nested config overrides, e.g. ``{"radar": {"noise": False}}``; ``perturbations``
+        switch on robustness perturbations (:mod:`lrp_gym.perturbations`).
     radar_fidelity : {"signal", "detections"}, optional
         Shortcut for ``radar.fidelity``.
     observation : str, optional
@@ -77,8 +132,7 @@ class LRPRadarNavEnv(gym.Env):
         Shortcut for ``task.mode``.
     render_mode : {"rgb_array", "human"}, optional
 
-    Action: ``Box(-1, 1, (2,), float32)`` = (forward speed, turn rate) as fractions of the
-    robot's limits (negative speed reverses, up to ``robot.max_reverse_mps``).
+    **Version history**: v0, the first and current version.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 4}
@@ -108,39 +162,46 @@ class LRPRadarNavEnv(gym.Env):
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.cfg.task.frame_period_s)}
         self.dt_s = self.cfg.task.frame_period_s
-        self.sensor = RadarSensor(self.world, self.cfg.radar)
-        self._surveyed_sensor = self.sensor
+        self.stack = LocalizationStack.from_config(self.world, self.cfg)
         # None when no perturbation is on: the hot path then pays one `is None` test per hook.
         perturbations = PerturbationSet.from_config(self.cfg.perturbations, self.world)
         self.perturbations: PerturbationSet | None = perturbations if len(perturbations) else None
-        self.tracker = LrpTracker.from_world(self.world, self.cfg.tracking)
-        loc = self.cfg.localization
-        self.localizer = make_localizer(self.world, loc)
-        self.lut = (
-            LookupTable(self.world, loc.lut_resolution_m, loc.lut_grid_m)
-            if loc.method == "lut"
-            else None
-        )
         self._obs_type = make_observation(self.cfg.env.observation, self.world.room.size_m)
         self.observation_space = self._obs_type.space
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
-        lim = self.world.robot
-        self._radius_m = lim.radius_m
+        self._radius_m = self.world.robot.radius_m
         self._substep_dt = (
             self.dt_s * np.arange(1, self.cfg.env.substeps + 1) / self.cfg.env.substeps
         )
         self._renderer = None
-        # Episode state (set in reset).
+        # Episode state (set in reset); the localisation state lives in self.stack.
         self.pose = np.zeros(3)
         self.path: WaypointPath | None = None
+        self.frame: FrameResult | None = None
         self.estimate: PoseEstimate | None = None
-        self._amcl_estimate: PoseEstimate | None = None  # the tracker's prior, also in LUT mode
-        self.detections = None
-        self.fingerprint = None
+        self.detections: Detections | None = None
+        self.fingerprint: Fingerprint | None = None
         self._s_true = self._s_est = 0.0
         self._last_action = np.zeros(2)
         self._steps = 0
         self._done = False  # the episode has terminated; step() pays nothing until reset()
+
+    # The stack's stages, for rendering and inspection.
+    @property
+    def sensor(self) -> RadarSensor:
+        return self.stack.sensor
+
+    @property
+    def tracker(self) -> LrpTracker:
+        return self.stack.tracker
+
+    @property
+    def localizer(self) -> Localizer:
+        return self.stack.localizer
+
+    @property
+    def lut(self) -> LookupTable | None:
+        return self.stack.lut
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
@@ -157,17 +218,12 @@ class LRPRadarNavEnv(gym.Env):
         self._last_action = np.zeros(2)
         self._steps = 0
         self._done = False
-        self.tracker.reset()
-        self.estimate = self._amcl_estimate = None
         known = self.pose if self.cfg.localization.init == "gaussian" else None
-        self.localizer.reset(rng, pose=known)
+        self.stack.reset(rng, known)
         self._s_true = self.path.project(self.pose[:2])
         if self.perturbations is not None:
             # The radar may see another layout than the surveyed one the localiser uses.
-            self.sensor = self._surveyed_sensor
-            layout = self.perturbations.reset(self._frame_context(), rng)
-            if layout is not self.world.layout:
-                self.sensor = RadarSensor(replace(self.world, layout=layout), self.cfg.radar)
+            self.stack.set_radar_layout(self.perturbations.reset(self._frame_context(), rng))
         self._sense(np.zeros(3), np.zeros(2))
         self._s_est = self.path.project(self.estimate.pose[:2])
         return self._observe(), self._info(collided=False, reached=False, rewards=None)
@@ -183,23 +239,9 @@ class LRPRadarNavEnv(gym.Env):
             )
             info = self._info(collided=False, reached=False, rewards=None)
             return self._observe(), 0.0, True, False, info
-        lim = self.world.robot
-        speed = action[0] * (lim.max_speed_mps if action[0] >= 0 else lim.max_reverse_mps)
-        turn = action[1] * lim.max_turn_rate_rps
-        # Sub-steps catch collisions that a single end-of-frame check would tunnel through.
-        track = integrate_unicycle(self.pose, speed, turn, self._substep_dt)
-        free = self.world.room.free(track[:, :2], self._radius_m)
-        collided = not bool(free.all())
         prev = self.pose
-        if collided:
-            first_bad = int(np.argmin(free))
-            new_pose = track[first_bad - 1] if first_bad > 0 else prev.copy()
-            velocity_xy = np.zeros(2)
-        else:
-            new_pose = track[-1]
-            velocity_xy = speed * np.array([np.cos(new_pose[2]), np.sin(new_pose[2])])
-        self.pose = new_pose
-        odo = self.world.odometry_noise.sample(odometry_delta(prev, new_pose), (), self.np_random)
+        velocity_xy, collided = self._drive(action)
+        odo = noisy_odometry(self.world.odometry_noise, prev, self.pose, self.np_random)
         self._steps += 1
         if self.perturbations is not None:
             odo, moved = self.perturbations.move(self._frame_context(), odo, self.np_random)
@@ -207,29 +249,10 @@ class LRPRadarNavEnv(gym.Env):
                 self.pose = moved
         self._sense(odo, velocity_xy)
         self._last_action = action.astype(float)
-
-        s_prev = self._s_true
-        self._s_true = self.path.project(
-            self.pose[:2], max(s_prev - _PROGRESS_BACK_M, 0.0), _PROGRESS_WINDOW_M
-        )
-        self._s_est = self.path.project(
-            self.estimate.pose[:2], max(self._s_est - _PROGRESS_BACK_M, 0.0), _PROGRESS_WINDOW_M
-        )
-        # The goal counts once reached along the path, not by cutting across to it.
-        tol = self.cfg.task.goal_tolerance_m
-        reached = bool(
-            np.linalg.norm(self.pose[:2] - self.path.goal_m) <= tol
-            and self._s_true >= self.path.length_m - 2.0 * tol
-        )
-        w = self.cfg.task.rewards
-        rewards = {
-            "progress": w.progress * (self._s_true - s_prev),
-            "time": -w.time,
-            "collision": -w.collision if collided else 0.0,
-            "goal": w.goal if reached else 0.0,
-        }
-        reward = float(sum(rewards.values()))
-        terminated = collided or reached
+        progress_m = self._update_progress()
+        reached = self._goal_reached()
+        reward, rewards = self._reward(progress_m, collided, reached)
+        terminated = self._terminated(collided, reached)
         self._done = terminated
         obs = self._observe()
         info = self._info(collided=collided, reached=reached, rewards=rewards)
@@ -254,6 +277,43 @@ class LRPRadarNavEnv(gym.Env):
             self._renderer.close()
             self._renderer = None
 
+    # ------------------------------------------------------------------ task
+    def _reward(
+        self, progress_m: float, collided: bool, reached: bool
+    ) -> tuple[float, dict[str, float]]:
+        """The step's reward and its terms (weights ``task.rewards``)."""
+        w = self.cfg.task.rewards
+        rewards = {
+            "progress": w.progress * progress_m,
+            "time": -w.time,
+            "collision": -w.collision if collided else 0.0,
+            "goal": w.goal if reached else 0.0,
+        }
+        return float(sum(rewards.values())), rewards
+
+    def _terminated(self, collided: bool, reached: bool) -> bool:
+        """A collision or the goal ends the episode (the 200-step limit is the wrapper's)."""
+        return collided or reached
+
+    def _goal_reached(self) -> bool:
+        """Within tolerance of the goal, having come along the path, not cut across to it."""
+        tol = self.cfg.task.goal_tolerance_m
+        return bool(
+            np.linalg.norm(self.pose[:2] - self.path.goal_m) <= tol
+            and self._s_true >= self.path.length_m - 2.0 * tol
+        )
+
+    def _update_progress(self) -> float:
+        """Project the true and estimated poses on the path; return the true progress made."""
+        s_prev = self._s_true
+        self._s_true = self.path.project(
+            self.pose[:2], max(s_prev - _PROGRESS_BACK_M, 0.0), _PROGRESS_WINDOW_M
+        )
+        self._s_est = self.path.project(
+            self.estimate.pose[:2], max(self._s_est - _PROGRESS_BACK_M, 0.0), _PROGRESS_WINDOW_M
+        )
+        return self._s_true - s_prev
+
     # ------------------------------------------------------------------ internals
     def _check_action(self, action) -> np.ndarray:
         a = np.asarray(action, dtype=float)
@@ -263,44 +323,40 @@ class LRPRadarNavEnv(gym.Env):
             raise ValueError(f"action must be finite, got {a.tolist()}")
         return np.clip(a, -1.0, 1.0)
 
+    def _drive(self, action: np.ndarray) -> tuple[np.ndarray, bool]:
+        """Move the true pose for one frame; return (velocity_xy, collided)."""
+        lim = self.world.robot
+        speed = action[0] * (lim.max_speed_mps if action[0] >= 0 else lim.max_reverse_mps)
+        turn = action[1] * lim.max_turn_rate_rps
+        # Sub-steps catch collisions that a single end-of-frame check would tunnel through.
+        track = integrate_unicycle(self.pose, speed, turn, self._substep_dt)
+        free = self.world.room.free(track[:, :2], self._radius_m)
+        if free.all():
+            self.pose = track[-1]
+            return speed * np.array([np.cos(self.pose[2]), np.sin(self.pose[2])]), False
+        first_bad = int(np.argmin(free))
+        self.pose = track[first_bad - 1] if first_bad > 0 else self.pose.copy()
+        return np.zeros(2), True
+
     def _sense(self, odometry: np.ndarray, velocity_xy: np.ndarray) -> None:
-        """One radar frame, tracker update and localisation update."""
+        """One frame of the localisation stack at the true pose, with the perturbations' hooks."""
         rng = self.np_random
         pert = self.perturbations
-        if pert is None:
-            self.detections = self.sensor.measure(self.pose, velocity_xy, rng)
-        else:
+        hooks: dict[str, Any] = {}
+        if pert is not None:
             ctx = self._frame_context()
             hidden, extra = pert.radar_inputs(ctx, rng)
-            det = self.sensor.measure(
-                self.pose, velocity_xy, rng, hidden=hidden, extra_scatterers=extra
-            )
-            self.detections = pert.filter_detections(ctx, det, rng)
-        ego = EgoMotion.from_velocity(velocity_xy, self.pose[2], odometry)
-        self.fingerprint, est = track_and_localize(
-            self.world,
-            self.tracker,
-            self.localizer,
-            self.detections,
-            self.dt_s,
-            ego,
-            self._amcl_estimate,
-            rng,
-            measurements=self.cfg.localization.measurements,
-        )
-        self._amcl_estimate = est
-        if self.lut is not None:
-            lut_est = self.lut.query(self.fingerprint)
-            # The table knows no heading: keep AMCL's.
-            pose = np.array([lut_est.pose[0], lut_est.pose[1], est.pose[2]])
-            est = PoseEstimate(
-                pose, lut_est.covariance, 0, 0.0, lut_est.converged, float(lut_est.converged), 1
-            )
-        self.estimate = est
+            hooks = {"hidden": hidden, "extra_scatterers": extra}
+            hooks["filter_detections"] = lambda det: pert.filter_detections(ctx, det, rng)
+        frame = self.stack.step(self.pose, velocity_xy, odometry, rng, **hooks)
+        self.frame = frame
+        self.detections, self.fingerprint = frame.detections, frame.fingerprint
+        self.estimate = frame.estimate
 
     def _frame_context(self) -> FrameContext:
+        sensor = self.stack.sensor
         return FrameContext(
-            self._steps, self.pose, self.world, self.sensor.world.layout, self.dt_s, self.sensor
+            self._steps, self.pose, self.world, sensor.world.layout, self.dt_s, sensor
         )
 
     def _snapshot(self) -> NavSnapshot:

@@ -1,9 +1,11 @@
 """Reproduction of the paper's positioning experiment along a scenario's path.
 
-Full chain per frame: signal-level radar (multipath) -> CFAR detections -> LRP tracker ->
-fingerprint -> look-up table and AMCL. The path is driven at ``robot.max_speed_mps`` with one
-frame every ``task.frame_period_s``; AMCL receives the true odometry between consecutive poses
-plus the robot's odometry noise (``world.odometry_noise``), drawn from the run's generator.
+Full chain per frame, one :class:`~lrp_gym.localization.stack.LocalizationStack`: signal-level
+radar (multipath) -> CFAR detections -> AMCL and the LRP tracker (in the configured order) ->
+fingerprint -> look-up table. The path is driven at ``robot.max_speed_mps`` with one frame
+every ``task.frame_period_s``; AMCL receives the true odometry between consecutive poses plus
+the robot's odometry noise (``world.odometry_noise``), drawn from the run's generator after
+the frame's radar noise.
 
 With ``localizer="grid"`` the histogram filter (:class:`~lrp_gym.localization.grid.GridFilter`)
 runs alongside, with a tracker of its own, on the same detections and odometry. It draws no
@@ -19,17 +21,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lrp_gym.config import ScenarioConfig
+from lrp_gym.config import LocalizationConfig, ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
-from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.localization.factory import Localizer, make_localizer
 from lrp_gym.localization.lut import LookupTable
+from lrp_gym.localization.stack import FrameResult, LocalizationStack
 from lrp_gym.radar.detections import Detections
+from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.motion import EgoMotion
 from lrp_gym.tracking.tracker import LrpTracker
-from lrp_gym.world.robot import odometry_delta
-from lrp_gym.world.trajectory import path_trajectory
+from lrp_gym.world.robot import noisy_odometry
+from lrp_gym.world.trajectory import Trajectory, path_trajectory
 from lrp_gym.world.world import World
 
 #: The paper's headline figures for its proof-of-concept scenario.
@@ -110,47 +113,141 @@ def converged_after(
     return int(bad[-1]) + 2 if bad[-1] + 1 < len(mean_errors_m) else None
 
 
-def _odometry(world: World, prev: np.ndarray, pose: np.ndarray, frame: int, rng) -> np.ndarray:
-    """Noisy odometry from ``prev`` to ``pose`` (zero at the first frame)."""
-    if frame == 0:
-        return np.zeros(3)
-    return world.odometry_noise.sample(odometry_delta(prev, pose), (), rng)
+@dataclass
+class _Bench:
+    """What every run shares: the world, the drive, the radar, the table and its build time."""
+
+    cfg: ScenarioConfig
+    loc: LocalizationConfig
+    world: World
+    traj: Trajectory
+    sensor: RadarSensor
+    lut: LookupTable
+    lut_build_s: float
+    true_fingerprints: bool
+    with_grid: bool
+
+    @classmethod
+    def build(
+        cls, cfg: ScenarioConfig, estimator: str, true_fingerprints: bool, with_grid: bool
+    ) -> _Bench:
+        world = World.from_config(cfg)
+        loc = cfg.localization.model_copy(update={"estimator": estimator})
+        traj = path_trajectory(
+            np.asarray(cfg.task.path), cfg.robot.max_speed_mps, cfg.task.frame_period_s
+        )
+        t0 = time.perf_counter()
+        lut = LookupTable(world, loc.lut_resolution_m, loc.lut_grid_m, 0.0)
+        lut_build_s = time.perf_counter() - t0
+        sensor = RadarSensor(world, cfg.radar)
+        return cls(cfg, loc, world, traj, sensor, lut, lut_build_s, true_fingerprints, with_grid)
+
+    def stack(self, localizer: Localizer, lut: LookupTable | None) -> LocalizationStack:
+        """A fresh stack (new tracker) around ``localizer`` on the shared radar."""
+        cfg = self.cfg
+        return LocalizationStack(
+            self.world,
+            self.sensor,
+            LrpTracker.from_world(self.world, cfg.tracking),
+            localizer,
+            lut,
+            dt_s=cfg.task.frame_period_s,
+            measurements=cfg.localization.measurements,
+        )
+
+    def stacks(self) -> list[LocalizationStack]:
+        """AMCL with the table; with the grid filter, a second stack on the same frames."""
+        out = [self.stack(Amcl(self.world, self.loc), self.lut)]
+        if self.with_grid:
+            grid_loc = self.loc.model_copy(update={"method": "grid"})
+            out.append(self.stack(make_localizer(self.world, grid_loc), None))
+        return out
+
+    def frame(
+        self, pose: np.ndarray, vel: np.ndarray, rng: np.random.Generator
+    ) -> Detections | Fingerprint:
+        """This frame's radar detections, or the exact fingerprint (radar and tracker bypassed)."""
+        if self.true_fingerprints:
+            world = self.world
+            return Fingerprint.from_true(
+                world.layout,
+                world.radar_position(pose[:2]),
+                self.cfg.tracking.measurement_std_m,
+            )
+        return self.sensor.measure(pose, vel, rng)
 
 
 @dataclass
-class _Chain:
-    """Identification and positioning of one localiser: its tracker, itself, its estimate."""
+class _RunErrors:
+    """Per-position errors (m) and particle counts of one run, and its wall time per stage."""
 
-    tracker: LrpTracker
-    localizer: Localizer
-    estimate: PoseEstimate | None = None
+    lut: np.ndarray
+    amcl: np.ndarray
+    grid: np.ndarray | None
+    particles: np.ndarray
+    timing_s: dict[str, float]
 
-    def step(
-        self,
-        world: World,
-        cfg: ScenarioConfig,
-        frame: Detections | Fingerprint,
-        ego: EgoMotion,
-        rng: np.random.Generator,
-    ) -> Fingerprint:
-        """One frame: radar detections through the tracker, or a true fingerprint directly."""
-        from lrp_gym.localization.pipeline import track_and_localize
 
-        if isinstance(frame, Fingerprint):
-            self.estimate = self.localizer.update(ego.odometry, frame, rng)
-            return frame
-        fp, self.estimate = track_and_localize(
-            world,
-            self.tracker,
-            self.localizer,
-            frame,
-            cfg.task.frame_period_s,
-            ego,
-            self.estimate,
-            rng,
-            measurements=cfg.localization.measurements,
-        )
-        return fp
+def _run(bench: _Bench, rng: np.random.Generator) -> _RunErrors:
+    """One drive along the path: every frame through the stack(s)."""
+    poses, vels = bench.traj.poses, bench.traj.velocities_xy_mps
+    k = len(poses)
+    out = _RunErrors(
+        lut=np.zeros(k),
+        amcl=np.zeros(k),
+        grid=np.zeros(k) if bench.with_grid else None,
+        particles=np.zeros(k, dtype=int),
+        timing_s=dict.fromkeys(_timing_keys(bench.with_grid), 0.0),
+    )
+    stacks = bench.stacks()
+    start = poses[0] if bench.loc.init == "gaussian" else None
+    for stack in stacks:
+        stack.reset(rng, start)
+    prev = None
+    for i, (pose, vel) in enumerate(zip(poses, vels, strict=True)):
+        t = time.perf_counter()
+        frame = bench.frame(pose, vel, rng)
+        out.timing_s["radar"] += time.perf_counter() - t
+        # The odometry is drawn after the radar frame (the env draws it before: its
+        # perturbations may change it before the radar sees the moved robot).
+        odo = noisy_odometry(bench.world.odometry_noise, prev, pose, rng)
+        ego = EgoMotion.from_velocity(vel, pose[2], odo)
+        res = stacks[0].localize(frame, ego, rng)
+        out.timing_s["tracking_amcl"] += res.elapsed_s["tracking_localization"]
+        out.timing_s["lut"] += res.elapsed_s["lut"]
+        _record(out, i, pose, res)
+        if len(stacks) > 1:
+            # Draws nothing from rng: AMCL's numbers are those of a run without it.
+            grid = stacks[1].localize(frame, ego, rng)
+            out.timing_s["tracking_grid"] += grid.elapsed_s["tracking_localization"]
+            out.grid[i] = np.hypot(*(grid.localizer_estimate.pose[:2] - pose[:2]))
+        prev = pose
+    return out
+
+
+def _timing_keys(with_grid: bool) -> tuple[str, ...]:
+    keys = ("radar", "tracking_amcl", "lut")
+    return (*keys, "tracking_grid") if with_grid else keys
+
+
+def _record(out: _RunErrors, i: int, pose: np.ndarray, res: FrameResult) -> None:
+    """The table's and AMCL's position errors at frame ``i``."""
+    est = res.localizer_estimate
+    out.lut[i] = np.hypot(*(res.lut_estimate.pose[:2] - pose[:2]))
+    out.amcl[i] = np.hypot(*(est.pose[:2] - pose[:2]))
+    out.particles[i] = est.n_particles
+
+
+def _run_summary(run: _RunErrors) -> dict:
+    """What ``progress`` receives after a run."""
+    info = {
+        "lut_mean_error_m": float(run.lut.mean()),
+        "amcl_mean_error_m": float(run.amcl.mean()),
+        "amcl_errors_m": run.amcl.copy(),
+    }
+    if run.grid is not None:
+        info["grid_mean_error_m"] = float(run.grid.mean())
+    return info
 
 
 def reproduce(
@@ -184,97 +281,49 @@ def reproduce(
         ``grid``: run the histogram filter too, on the same detections and odometry (its
         errors in ``grid_errors_m``; AMCL's are unchanged).
     """
-    from lrp_gym.radar.sensor import RadarSensor
-
     if localizer not in ("amcl", "grid"):
         raise ValueError(f"localizer must be amcl or grid, got {localizer!r}")
     if len(cfg.task.path) < 2:
         raise ValueError("the scenario has no path (task.path needs at least 2 waypoints)")
-    world = World.from_config(cfg)
-    loc = cfg.localization.model_copy(update={"estimator": estimator})
-    traj = path_trajectory(
-        np.asarray(cfg.task.path), cfg.robot.max_speed_mps, cfg.task.frame_period_s
-    )
-    t0 = time.perf_counter()
-    lut = LookupTable(world, loc.lut_resolution_m, loc.lut_grid_m, 0.0)
-    lut_build_s = time.perf_counter() - t0
-    sensor = RadarSensor(world, cfg.radar)
-    k = len(traj)
-    lut_err = np.zeros((runs, k))
-    amcl_err = np.zeros((runs, k))
-    grid_err = np.zeros((runs, k)) if localizer == "grid" else None
-    n_part = np.zeros((runs, k), dtype=int)
-    timing = {"radar": 0.0, "tracking_amcl": 0.0, "lut": 0.0}
-    if grid_err is not None:
-        timing["tracking_grid"] = 0.0
-    children = np.random.SeedSequence(seed).spawn(runs)
-    for run in range(runs):
-        rng = np.random.default_rng(children[run])
-        start = traj.poses[0] if loc.init == "gaussian" else None
-        chains = [_Chain(LrpTracker.from_world(world, cfg.tracking), Amcl(world, loc))]
-        if grid_err is not None:
-            grid_loc = loc.model_copy(update={"method": "grid"})
-            chains.append(
-                _Chain(LrpTracker.from_world(world, cfg.tracking), make_localizer(world, grid_loc))
-            )
-        for chain in chains:
-            chain.localizer.reset(rng, start)
-        prev = traj.poses[0]
-        for i, (pose, vel) in enumerate(zip(traj.poses, traj.velocities_xy_mps, strict=True)):
-            t = time.perf_counter()
-            if true_fingerprints:
-                frame = Fingerprint.from_true(
-                    world.layout, world.radar_position(pose[:2]), cfg.tracking.measurement_std_m
-                )
-            else:
-                frame = sensor.measure(pose, vel, rng)
-            t1 = time.perf_counter()
-            ego = EgoMotion.from_velocity(vel, pose[2], _odometry(world, prev, pose, i, rng))
-            fp = chains[0].step(world, cfg, frame, ego, rng)
-            t2 = time.perf_counter()
-            lut_est = lut.query(fp)
-            t3 = time.perf_counter()
-            for key, dt in zip(timing, (t1 - t, t2 - t1, t3 - t2), strict=False):
-                timing[key] += dt
-            if grid_err is not None:
-                chains[1].step(world, cfg, frame, ego, rng)  # draws nothing from rng
-                timing["tracking_grid"] += time.perf_counter() - t3
-                grid_err[run, i] = np.hypot(*(chains[1].estimate.pose[:2] - pose[:2]))
-            prev = pose
-            est = chains[0].estimate
-            lut_err[run, i] = np.hypot(*(lut_est.pose[:2] - pose[:2]))
-            amcl_err[run, i] = np.hypot(*(est.pose[:2] - pose[:2]))
-            n_part[run, i] = est.n_particles
+    bench = _Bench.build(cfg, estimator, true_fingerprints, localizer == "grid")
+    results = []
+    for run, child in enumerate(np.random.SeedSequence(seed).spawn(runs)):
+        results.append(_run(bench, np.random.default_rng(child)))
         if progress is not None:
-            info = {
-                "lut_mean_error_m": float(lut_err[run].mean()),
-                "amcl_mean_error_m": float(amcl_err[run].mean()),
-                "amcl_errors_m": amcl_err[run].copy(),
-            }
-            if grid_err is not None:
-                info["grid_mean_error_m"] = float(grid_err[run].mean())
-            progress(run, info)
-    frames = runs * k
-    frame_ms = {key: 1e3 * v / frames for key, v in timing.items()}
+            progress(run, _run_summary(results[-1]))
+    return _reproduction(bench, results, seed, estimator, localizer)
+
+
+def _reproduction(
+    bench: _Bench, results: list[_RunErrors], seed: int, estimator: str, localizer: str
+) -> Reproduction:
+    """Stack the runs' errors and add what the run was."""
+    frames = len(results) * len(bench.traj)
+    frame_ms = {
+        key: 1e3 * sum(r.timing_s[key] for r in results) / frames
+        for key in _timing_keys(bench.with_grid)
+    }
     frame_ms["total"] = sum(frame_ms.values())
+    grid = np.stack([r.grid for r in results]) if bench.with_grid else None
+    cfg, loc, lut = bench.cfg, bench.loc, bench.lut
     return Reproduction(
-        lut_err,
-        amcl_err,
+        np.stack([r.lut for r in results]),
+        np.stack([r.amcl for r in results]),
         lut.n_entries,
         frame_ms,
-        traj.poses,
-        n_part,
+        bench.traj.poses,
+        np.stack([r.particles for r in results]),
         meta={
             "scenario": cfg.name,
             "noise": bool(cfg.radar.noise),
-            "fingerprints": "true" if true_fingerprints else "radar",
+            "fingerprints": "true" if bench.true_fingerprints else "radar",
             "estimator": estimator,
             "measurements": loc.measurements,
             "seed": seed,
             "initial_particles": loc.initial_particles,
-            "lut_build_s": lut_build_s,
+            "lut_build_s": bench.lut_build_s,
             "lut_ambiguous_entries": int(np.sum(lut.regions_per_entry > 1)),
             "localizer": localizer,
         },
-        grid_errors_m=grid_err,
+        grid_errors_m=grid,
     )

@@ -94,5 +94,7 @@ def summary(results: list[RoomResult]) -> dict[str, Any]:
         "median_amcl_radar_m": float(np.median([r.amcl_radar_m for r in results])),
         "median_amcl_true_m": float(np.median([r.amcl_true_m for r in results])),
         "median_lut_radar_m": float(np.median([r.lut_radar_m for r in results])),
+        # the trustworthy-localisation target: AMCL within 0.15 m in 3 of 4 rooms
+        "share_amcl_radar_within_0_15_m": float(np.mean([r.amcl_radar_m <= 0.15 for r in results])),
         "per_room": [asdict(r) for r in results],
     }

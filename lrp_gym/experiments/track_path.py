@@ -8,15 +8,12 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from lrp_gym.config import ScenarioConfig
-from lrp_gym.localization.factory import make_localizer
-from lrp_gym.localization.pipeline import track_and_localize
+from lrp_gym.localization.stack import LocalizationStack
 from lrp_gym.radar.detections import Detections
-from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.metrics import SwapCounter, per_type_errors_m
 from lrp_gym.tracking.motion import EgoMotion
-from lrp_gym.tracking.tracker import LrpTracker
-from lrp_gym.world.robot import odometry_delta
+from lrp_gym.world.robot import noisy_odometry
 from lrp_gym.world.trajectory import Trajectory, path_trajectory
 from lrp_gym.world.world import World
 
@@ -72,11 +69,13 @@ def ego_motions(trajectory: Trajectory, world: World, rng: np.random.Generator) 
     true ``(rot1, trans, rot2)`` plus ``world.odometry_noise`` (zero in the first frame).
     """
     poses, vel = trajectory.poses, trajectory.velocities_xy_mps
-    out = [EgoMotion.from_velocity(vel[0], poses[0, 2], np.zeros(3))]
-    for k in range(1, len(trajectory)):
-        odo = world.odometry_noise.sample(odometry_delta(poses[k - 1], poses[k]), (), rng)
-        out.append(EgoMotion.from_velocity(vel[k], poses[k, 2], odo))
-    return out
+    noise = world.odometry_noise
+    return [
+        EgoMotion.from_velocity(
+            vel[k], poses[k, 2], noisy_odometry(noise, poses[k - 1] if k else None, poses[k], rng)
+        )
+        for k in range(len(trajectory))
+    ]
 
 
 def run_path(
@@ -88,51 +87,36 @@ def run_path(
     to that type's true distances; tracked RMSE: the same for the tracker's fingerprint;
     ``swaps``: frames where a confirmed track changed reflector (:class:`SwapCounter`);
     ``missed_frames``: frames where some reflector had no fresh tracked distance.
-    AMCL runs alongside, as in the env (:func:`~lrp_gym.localization.pipeline.track_and_localize`).
-    With ``use_prior`` its prediction identifies the reflectors
-    (:mod:`lrp_gym.tracking.prior`); with ``use_ego`` the tracker gets the
-    robot's (noisy) odometry and predicts static points (:mod:`lrp_gym.tracking.motion`),
-    else the paper's constant-velocity model.
+    AMCL runs alongside, as in the env (one :class:`~lrp_gym.localization.stack.LocalizationStack`).
+    With ``use_prior`` its prediction identifies the reflectors (:mod:`lrp_gym.tracking.prior`);
+    with ``use_ego`` the tracker gets the robot's (noisy) odometry and predicts static points
+    (:mod:`lrp_gym.tracking.motion`), else the paper's constant-velocity model.
     """
-
     if len(cfg.task.path) < 2:
         raise ValueError("task.path needs at least two waypoints")
     world = World.from_config(cfg)
-    sensor = RadarSensor(world, cfg.radar)
-    tracker = LrpTracker.from_world(world, cfg.tracking)
+    stack = LocalizationStack.from_config(world, cfg, map_aided=use_prior, use_ego=use_ego)
+    tracker = stack.tracker
     dt = cfg.task.frame_period_s
     traj = path_trajectory(np.asarray(cfg.task.path), cfg.robot.max_speed_mps, dt)
     rng = np.random.default_rng(seed)
     odo_rng = np.random.default_rng([seed, 1])  # odometry noise apart from the radar's
     ego = ego_motions(traj, world, odo_rng)
-    amcl = make_localizer(world, cfg.localization)
-    amcl.reset(rng, traj.poses[0] if cfg.localization.init == "gaussian" else None)
-    est = None
+    stack.reset(rng, traj.poses[0] if cfg.localization.init == "gaussian" else None)
     ti = world.layout.type_index
     n_types = len(world.layout.types)
     counts = world.layout.counts_per_type()
     truth = world.true_distances_m(traj.poses[:, :2])
-    raw = np.full_like(truth, np.nan)
-    tracked = np.full_like(truth, np.nan)
+    raw, tracked = np.full_like(truth, np.nan), np.full_like(truth, np.nan)
     fresh = np.zeros(truth.shape, dtype=bool)
     swaps = SwapCounter(ti)
     raw_err, trk_err, dets, fps = [], [], [], []
     missed = 0
     for k in range(len(traj)):
-        det = sensor.measure(traj.poses[k], traj.velocities_xy_mps[k], rng)
-        fp, est = track_and_localize(
-            world,
-            tracker,
-            amcl,
-            det,
-            dt,
-            ego[k],
-            est,
-            rng,
-            measurements=cfg.localization.measurements,
-            map_aided=use_prior,
-            use_ego=use_ego,
-        )
+        frame = stack.step(traj.poses[k], traj.velocities_xy_mps[k], ego[k].odometry, rng)
+        det, fp = frame.detections, frame.fingerprint
+        if det is None:  # the path drive never skips the radar
+            raise RuntimeError(f"frame {k}: the stack returned no detections")
         cls = tracker.classifier.classify(det)
         gated = tuple(det.range_m[cls == t] for t in range(n_types))
         raw[k] = match_to_truth(gated, truth[k], ti)
@@ -145,16 +129,16 @@ def run_path(
         missed += any(int(f.sum()) < n for f, n in zip(fp.fresh, counts, strict=True))
         dets.append(det)
         fps.append(fp)
-
-    def rmse(parts: list[np.ndarray]) -> float:
-        e = np.concatenate(parts) if parts else np.zeros(0)
-        return float(np.sqrt(np.mean(e**2))) if len(e) else float("nan")
-
     summary = {
         "frames": len(traj),
-        "raw_rmse_m": rmse(raw_err),
-        "tracked_rmse_m": rmse(trk_err),
+        "raw_rmse_m": _rmse(raw_err),
+        "tracked_rmse_m": _rmse(trk_err),
         "swaps": swaps.swaps,
         "missed_frames": missed,
     }
     return TrackRun(traj, truth, raw, tracked, fresh, dets, fps, summary)
+
+
+def _rmse(parts: list[np.ndarray]) -> float:
+    e = np.concatenate(parts) if parts else np.zeros(0)
+    return float(np.sqrt(np.mean(e**2))) if len(e) else float("nan")

@@ -44,10 +44,16 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from lrp_gym.localization._map_kernel import map_return_density
+from lrp_gym.localization.ghosts import GhostModel
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.room import Room
-from lrp_gym.world.structure import structure_ranges_m, structure_velocities_mps
+from lrp_gym.world.structure import (
+    N_STRUCTURE_RETURNS,
+    structure_ranges_m,
+    structure_velocities_mps,
+)
 
 if TYPE_CHECKING:
     from lrp_gym.config import LocalizationConfig
@@ -132,6 +138,12 @@ class FingerprintModel:
     detection_probability : float
         Probability that a reflector in view yields a detection; a reflector that no measured
         distance of its type matches costs ``1 - P_D`` (0 leaves this term out).
+    ghost_probability : float
+        Probability that a measured distance is a reflector seen via a wall or the ceiling
+        (:mod:`lrp_gym.localization.ghosts`); needs ``room``.
+    use_numba : bool
+        Evaluate the room-structure and ghost terms with the compiled kernel of
+        :mod:`lrp_gym.localization._map_kernel` when numba is installed.
     """
 
     def __init__(
@@ -147,7 +159,10 @@ class FingerprintModel:
         doppler_outlier_probability: float = 0.1,
         max_velocity_mps: float = 5.0,
         detection_probability: float = 0.0,
+        ghost_probability: float = 0.0,
+        use_numba: bool = True,
     ) -> None:
+        self.use_numba = use_numba
         self.room = room
         self.detection_probability = float(detection_probability)
         self.doppler_std_mps = float(doppler_std_mps)
@@ -155,6 +170,15 @@ class FingerprintModel:
         self.velocity_density = 0.5 / float(max_velocity_mps)
         self.mount_height_m = float(mount_height_m)
         self.structure_probability = float(structure_probability) if room is not None else 0.0
+        self.ghost_probability = float(ghost_probability) if room is not None else 0.0
+        if self.structure_probability + self.ghost_probability > 1.0:
+            raise ValueError(
+                "structure_probability + ghost_probability must be <= 1, got "
+                f"{self.structure_probability} + {self.ghost_probability}"
+            )
+        self.ghosts = (
+            GhostModel(room, layout, mount_height_m) if self.ghost_probability > 0.0 else None
+        )
         self.type_names = layout.type_names
         self._xy = []
         self._dz2 = []
@@ -183,6 +207,7 @@ class FingerprintModel:
             doppler_outlier_probability=cfg.doppler_outlier_probability,
             max_velocity_mps=world.fmcw.max_velocity_mps,
             detection_probability=cfg.detection_probability,
+            ghost_probability=cfg.ghost_probability,
         )
 
     def expected(self, xy: np.ndarray, dtype=np.float64) -> list[np.ndarray]:
@@ -227,6 +252,14 @@ class FingerprintModel:
             rates.append(rate)
         return ranges, rates
 
+    def _doppler_coefficients(self) -> tuple[float, float, float]:
+        """(a, b, c) of the Doppler density ``a exp(c dv^2) + b`` (see :meth:`_doppler_density`)."""
+        s = self.doppler_std_mps
+        q = self.doppler_outlier_probability
+        if s <= 0.0:
+            return 1.0, 0.0, 0.0
+        return (1.0 - q) / (np.sqrt(2.0 * np.pi) * s), q * self.velocity_density, -0.5 / s**2
+
     def _doppler_density(self, v: np.ndarray, expected_v: np.ndarray, dtype) -> np.ndarray:
         """Density of measured velocities ``v`` (n,) given expected ones (k, N): (n, k, N)."""
         s = self.doppler_std_mps
@@ -238,6 +271,41 @@ class FingerprintModel:
         dv *= dtype((1.0 - q) / (np.sqrt(2.0 * np.pi) * s))
         dv += dtype(q * self.velocity_density)
         return dv
+
+    def _map_return_weights(self, dtype) -> np.ndarray | None:
+        """Mixture weight (K,) of each return of :meth:`_map_returns`; None without any."""
+        parts = []
+        if self.structure_probability > 0.0:
+            parts.append(
+                np.full(N_STRUCTURE_RETURNS, self.structure_probability / N_STRUCTURE_RETURNS)
+            )
+        if self.ghosts is not None:
+            parts.append(np.full(self.ghosts.count, self.ghost_probability / self.ghosts.count))
+        return np.concatenate(parts).astype(dtype) if parts else None
+
+    def _map_returns(
+        self, xy: np.ndarray, velocity_xy: np.ndarray | None, dtype
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Ranges (K, N) of the non-reflector returns that the map predicts (room structure,
+        then reflector ghosts) and their radial velocities (K, N) given ``velocity_xy``."""
+        ranges, rates = [], []
+        if self.structure_probability > 0.0:
+            ranges.append(structure_ranges_m(self.room, self.mount_height_m, xy).astype(dtype))
+            if velocity_xy is not None:
+                rates.append(
+                    structure_velocities_mps(
+                        self.room, self.mount_height_m, xy, velocity_xy
+                    ).astype(dtype)
+                )
+        if self.ghosts is not None:
+            g, gv = self.ghosts.ranges(xy, velocity_xy, dtype)
+            ranges.append(g)
+            if gv is not None:
+                rates.append(gv)
+        r = np.concatenate(ranges) if len(ranges) > 1 else ranges[0]
+        if velocity_xy is None:
+            return r, None
+        return r, (np.concatenate(rates) if len(rates) > 1 else rates[0])
 
     def log_likelihood(
         self,
@@ -258,9 +326,11 @@ class FingerprintModel:
         n_pos = xy.shape[0]
         out = np.zeros(n_pos)
         expected = None
-        structure = None
+        extra = extra_v = None
         c = self.clutter_probability
         s_prob = self.structure_probability
+        gh_prob = self.ghost_probability
+        extra_w = self._map_return_weights(dtype)
         doppler = (
             self.doppler_std_mps > 0.0
             and velocity_xy is not None
@@ -329,21 +399,20 @@ class FingerprintModel:
             if dens_v is not None:
                 r *= dens_v
             g = r.mean(axis=1)  # (n, N)
-            if s_prob > 0.0:
-                if structure is None:
-                    structure = structure_ranges_m(self.room, self.mount_height_m, xy).astype(dtype)
-                    if doppler:
-                        structure_v = structure_velocities_mps(
-                            self.room, self.mount_height_m, xy, velocity_xy
-                        ).astype(dtype)
-                rs = structure[None, :, :] - z.astype(dtype)[:, None, None]  # (n, 9, N)
-                rs *= rs
-                rs *= half_inv[:, :, None]
-                np.exp(rs, out=rs)
-                if doppler:
-                    rs *= self._doppler_density(v_sorted, structure_v, dtype)
-                g *= dtype(1.0 - s_prob)
-                g += dtype(s_prob) * rs.mean(axis=1)
+            if extra_w is not None:
+                if extra is None:
+                    extra, extra_v = self._map_returns(xy, velocity_xy if doppler else None, dtype)
+                g *= dtype(1.0 - s_prob - gh_prob)
+                g += map_return_density(
+                    z,
+                    half_inv[:, 0],
+                    extra,
+                    extra_w,
+                    v_sorted if doppler else None,
+                    extra_v,
+                    self._doppler_coefficients(),
+                    self.use_numba,
+                )
             g *= ((1.0 - c) * np.exp(log_norm)).astype(dtype)[:, None]
             g += dtype(c * clutter_density)
             # Every factor is >= the clutter floor: chunks of 8 cannot underflow in float32.
@@ -355,7 +424,7 @@ class FingerprintModel:
                 continue
             # All n distances are reflectors with probability (1 - c)^n: sorted assignment;
             # otherwise at least one is clutter (and one reflector missed): the mixture.
-            p_clean = ((1.0 - c) * (1.0 - s_prob)) ** n
+            p_clean = ((1.0 - c) * (1.0 - s_prob - gh_prob)) ** n
             out += np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
         return out
 

@@ -155,6 +155,7 @@ class LrpTracker:
         dt_s: float,
         ego: EgoMotion | None = None,
         prior: DistancePrior | None = None,
+        candidates: np.ndarray | None = None,
     ) -> Fingerprint:
         """Process one radar frame and return the estimated fingerprint.
 
@@ -175,6 +176,9 @@ class LrpTracker:
             of a type are those that best match its reflectors' predictions (none is reported
             for a reflector that no track matches within the gate); without it, the
             best-scoring persistent tracks.
+        candidates : ndarray of bool (N, T), optional
+            ``classifier.candidates(detections)`` when the caller already has it (the window
+            test of :meth:`gated_fingerprint` for the same frame); computed here otherwise.
 
         Returns
         -------
@@ -194,10 +198,8 @@ class LrpTracker:
             t.fresh = False
         self._speed_mps = None if ego is None else ego.speed_mps
 
-        last, window = self._gated
-        if last is not detections:  # gated_fingerprint(detections) already ran the window test
-            window = self.classifier.candidates(detections)
-            self._gated = (detections, window)
+        window = self.classifier.candidates(detections) if candidates is None else candidates
+        self._gated = (detections, window)
         cand = window if ego is None else window & self._doppler_ok(detections, ego.speed_mps)
         z = np.column_stack([detections.range_m, detections.velocity_mps])
         free = np.ones(len(detections), dtype=bool)
@@ -243,18 +245,20 @@ class LrpTracker:
         ]
         return tracks_fingerprint(self.type_names, by_type, [[t.fresh for t in g] for g in by_type])
 
-    def gated_fingerprint(self, detections: Detections | None = None) -> Fingerprint:
+    def gated_fingerprint(
+        self, detections: Detections | None = None, candidates: np.ndarray | None = None
+    ) -> Fingerprint:
         """Detections that pass a type's RCS and range window, unsmoothed.
 
         Every reflector-like detection, not only the tracked ones: a positioning method with a
         clutter-aware likelihood (AMCL) uses them all; each goes to its best-fitting type.
-        Without ``detections``: those of the last :meth:`update`.
+        Without ``detections``: those of the last :meth:`update`. ``candidates`` is their
+        window test (``classifier.candidates(detections)``) when the caller already has it.
         """
         if detections is None:
             detections, cand = self._gated  # the window test of the last update, reused
         else:
-            cand = self.classifier.candidates(detections)
-            self._gated = (detections, cand)  # update() of the same frame reuses it
+            cand = self.classifier.candidates(detections) if candidates is None else candidates
         best = self.classifier.classify(detections, cand)
         var = self.cfg.measurement_std_m**2
         order = np.argsort(detections.range_m, kind="stable")

@@ -6,6 +6,7 @@ from lrp_gym.world.robot import (
     OdometryNoise,
     apply_odometry,
     integrate_unicycle,
+    noisy_odometry,
     odometry_delta,
     wrap_angle,
 )
@@ -23,6 +24,7 @@ __all__ = [
     "World",
     "apply_odometry",
     "integrate_unicycle",
+    "noisy_odometry",
     "odometry_delta",
     "rcs_peak_m2",
     "wrap_angle",

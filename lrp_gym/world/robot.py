@@ -87,6 +87,23 @@ class OdometryNoise:
         return delta + rng.standard_normal(size + (3,)) * self.std(delta)
 
 
+def noisy_odometry(
+    noise: OdometryNoise,
+    prev_pose: np.ndarray | None,
+    pose: np.ndarray,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """What the wheel odometry reports for the move from ``prev_pose`` to ``pose``.
+
+    The true ``(rot1, trans, rot2)`` plus one draw of ``noise`` from ``rng``. ``prev_pose``
+    None is the first frame of a run: nothing moved yet, zeros, and no draw (so the random
+    stream does not depend on whether a run starts with a move).
+    """
+    if prev_pose is None:
+        return np.zeros(3)
+    return noise.sample(odometry_delta(prev_pose, pose), (), rng)
+
+
 def apply_odometry(poses: np.ndarray, deltas: np.ndarray) -> np.ndarray:
     """Move poses (..., 3) by odometry deltas (..., 3) = (rot1, trans, rot2)."""
     th = poses[..., 2] + deltas[..., 0]

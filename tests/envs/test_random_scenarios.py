@@ -110,3 +110,20 @@ def test_random_rooms_option_is_checked(args, message, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["reproduce-paper", *args])
     assert exc.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_random_rooms_json_is_json_on_stdout(monkeypatch, capsys):
+    import json
+
+    from lrp_gym.cli import main
+    from lrp_gym.experiments import rooms
+
+    full = rooms.sweep
+    monkeypatch.setattr(rooms, "sweep", lambda *a, **k: full(*a, **{**k, "small": True}))
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce-paper", "--random-rooms", "1", "--runs", "1", "--json"])
+    assert exc.value.code == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["rooms"] == 1
+    r = data["per_room"][0]
+    assert data["share_amcl_radar_within_0_15_m"] == float(r["amcl_radar_m"] <= 0.15)

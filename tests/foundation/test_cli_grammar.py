@@ -58,6 +58,87 @@ def test_json_prints_and_out_writes(name):
         assert re.search(r"\b(file|folder)\b", out.help), "--out says file or folder"
 
 
+SCENARIO_JSON_COMMANDS = [
+    n for n in COMMANDS if "scenario" in _params(n) and _opt(n, "--json") is not None
+]
+FILE_OUT_COMMANDS = [
+    n for n in COMMANDS if _opt(n, "--out") is not None and _opt(n, "--out").metavar != "FOLDER"
+]
+
+
+@pytest.mark.parametrize("name", SCENARIO_JSON_COMMANDS)
+def test_every_json_command_can_write_its_result_to_a_file(name):
+    out = _opt(name, "--out")
+    assert out is not None, "--json prints the result; --out PATH writes it"
+    assert out.metavar in ("FOLDER", "FILE.json", "FILE.yaml"), "the file type is in the help"
+    if out.metavar != "FOLDER":
+        assert _opt(name, "--force") is not None, "an existing file needs --force"
+
+
+@pytest.mark.parametrize("name", FILE_OUT_COMMANDS)
+def test_out_is_checked_before_any_work(name, tmp_path, capsys, monkeypatch):
+    import lrp_gym.config
+
+    def no_work(*_a, **_k):
+        raise AssertionError(f"{name} loaded its scenario before checking --out")
+
+    monkeypatch.setattr(lrp_gym.config, "load_scenario", no_work)
+    suffix = _opt(name, "--out").metavar.removeprefix("FILE")
+    existing, folder = tmp_path / f"mine{suffix}", tmp_path / f"dir{suffix}"
+    existing.write_text("# mine\n")
+    folder.mkdir()
+    extra = ["--pose", "2", "2", "0"] if name == "radar" else []
+    code, out, err = run(capsys, name, *extra, "--out", str(existing))
+    assert code == 2 and out == ""
+    assert err.startswith("error: --out:") and "--force" in err
+    assert existing.read_text() == "# mine\n"
+    code, _, err = run(capsys, name, *extra, "--out", str(folder))
+    assert code == 2 and "--out" in err and "folder" in err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["validate"],
+        ["radar", "--pose", "2", "2", "0"],
+        ["radar-rate", "--poses", "3", "--fidelity", "detections"],
+        ["track", "--fidelity", "detections"],
+    ],
+)
+def test_out_writes_what_json_prints(argv, tmp_path, capsys):
+    path = tmp_path / "r.json"
+    code, out, err = run(capsys, *argv, "--json", "--out", str(path))
+    assert code == 0
+    assert json.loads(out) == json.loads(path.read_text())
+    assert err.strip().splitlines() == [f"wrote {path}"]
+    path.unlink()
+    code, out, _ = run(capsys, *argv, "--out", str(path))
+    assert code == 0 and path.is_file()
+    assert out.strip().splitlines()[-1] == f"wrote {path}"
+
+
+@pytest.mark.parametrize("name", [n for n in COMMANDS if "scenario" in _params(n)])
+def test_hidden_scenario_alias(name, capsys, monkeypatch):
+    alias = _opt(name, "--scenario")
+    assert alias is not None and alias.hidden, "old scripts pass --scenario NAME"
+    monkeypatch.setenv("COLUMNS", "80")
+    _, out, _ = run(capsys, name, "--help")
+    assert "--scenario" not in out
+
+
+def test_scenario_alias_means_the_positional(capsys):
+    code, out, _ = run(capsys, "validate", "--scenario", "ipin2023-2types", "--json")
+    assert code == 0 and json.loads(out)["name"] == "ipin2023-2types"
+    code, out, _ = run(
+        capsys, "validate", "ipin2023-2types", "--scenario=ipin2023-2types", "--json"
+    )
+    assert code == 0 and json.loads(out)["name"] == "ipin2023-2types"
+    code, _, err = run(capsys, "validate", "ipin2023", "--scenario", "ipin2023-2types")
+    assert code == 2 and err.startswith("error: --scenario:") and "twice" in err
+    _, _, err = run(capsys, "validate", "--scenario", "ipin2032")
+    assert "did you mean 'ipin2023'" in err
+
+
 @pytest.mark.parametrize("name", COMMANDS)
 def test_switches_and_choices(name):
     hints = typing.get_type_hints(GROUP.commands[name].callback)
@@ -78,6 +159,8 @@ def test_help_reads_at_80_columns(name, capsys, monkeypatch):
     code, out, _ = run(capsys, name, "--help")
     assert code == 0
     assert "<bool>" not in out and "{" not in out and "``" not in out
+    # no typer/click type labels: metavars say what a value is (SCENARIO, N, FILE.json)
+    assert not re.search(r"<(str|int|float|path|text)>|\b(TEXT|INTEGER|FLOAT)\b", out)
     assert max(len(line) for line in out.splitlines()) <= 80
 
 

@@ -22,9 +22,13 @@ LAYOUT = [
 def loc_cfg():
     base = load_scenario("ipin2023")
     # These tests feed synthetic fingerprints with independent errors per frame: the untempered
-    # likelihood is the right model for them (tempering is for the radar's correlated errors).
+    # likelihood is the right model for them (tempering is for the radar's correlated errors),
+    # and they hold no returns of the room, so the model expects none.
     return base.with_overrides(
-        {"reflectors": {"layout": LAYOUT}, "localization": {"likelihood_exponent": 1.0}}
+        {
+            "reflectors": {"layout": LAYOUT},
+            "localization": {"likelihood_exponent": 1.0, "structure_probability": 0.0},
+        }
     )
 
 

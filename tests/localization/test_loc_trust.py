@@ -128,3 +128,37 @@ def test_global_localisation_from_a_uniform_start_on_the_two_type_layout():
         errors = np.array(errors)
         assert np.all(errors[3:] < 0.1), errors
         assert not np.any(np.array(conv) & (errors > 0.3))  # never confidently wrong
+
+
+def test_confidence_is_roughly_calibrated_on_the_default_task():
+    """Pure pursuit on the default task (unknown start pose and heading, 1-type paper room,
+    detections-level radar): a few hundred seeded steps. Loose bounds: the confident steps are
+    localised, the unconfident ones less so, and a converged flag is almost never wrong."""
+    import gymnasium as gym
+
+    import lrp_gym  # noqa: F401
+    from agents.pure_pursuit import PurePursuitPolicy
+    from lrp_gym.localization.metrics import trust_metrics
+
+    env = gym.make("LRPRadarNavFast-v0")
+    policy = PurePursuitPolicy.from_env(env)
+    errors, conv, conf = [], [], []
+    for seed in range(7000, 7012):
+        obs, _ = env.reset(seed=seed)
+        done = False
+        while not done:
+            action, _ = policy.predict(obs, None, np.ones(1, bool), deterministic=True)
+            obs, _, terminated, truncated, info = env.step(action)
+            done = terminated or truncated
+            errors.append(info["position_error_m"])
+            conv.append(info["converged"])
+            conf.append(info["localization_confidence"])
+    env.close()
+    errors, conv, conf = np.array(errors), np.array(conv), np.array(conf)
+    assert len(errors) >= 150
+    high = conf >= 0.8
+    assert high.sum() >= 50 and np.mean(errors[high] < 0.2) >= 0.8
+    if (~high).sum() >= 10:
+        assert np.mean(errors[~high] < 0.2) < np.mean(errors[high] < 0.2)
+    m = trust_metrics([errors], [conv], [conf])
+    assert m["confidently_wrong_rate"] <= 0.05

@@ -1,0 +1,345 @@
+"""One radar frame, one object: radar, tracker, localiser and look-up table in the order the data allow.
+
+:class:`LocalizationStack` owns the four stages and the order between them; everything that
+drives a robot frame by frame (the env, ``reproduce-paper``, ``lrp-gym track``) calls its
+:meth:`~LocalizationStack.step` and reads a :class:`FrameResult`.
+
+The order depends on what the localiser weighs (``localization.measurements``):
+
+- ``detections`` (default): the localiser needs no tracker, so it runs first, on the
+  detections that pass a reflector type's RCS/range window; its posterior of *this* frame then
+  tells the tracker which track is which reflector (map-aided identification);
+- ``tracks``: the tracker runs first, identified by the localiser's cloud of the *previous*
+  frame moved by the odometry (the localiser has not seen this frame yet, so the tracker's
+  output is not built from its own detections fed back), then the localiser weighs the
+  tracker's fingerprint.
+
+The look-up table, when there is one, positions the tracker's fingerprint; it knows no
+heading, so the stack's pose estimate is then the table's position with the localiser's heading.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from lrp_gym.config import ScenarioConfig
+from lrp_gym.localization.estimate import PoseEstimate
+from lrp_gym.localization.factory import Localizer, make_localizer
+from lrp_gym.localization.lut import LookupTable
+from lrp_gym.radar.detections import Detections
+from lrp_gym.radar.sensor import RadarSensor
+from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.tracking.motion import EgoMotion
+from lrp_gym.tracking.prior import DistancePrior
+from lrp_gym.tracking.tracker import LrpTracker
+from lrp_gym.world.reflectors import ReflectorLayout
+from lrp_gym.world.robot import apply_odometry
+from lrp_gym.world.world import World
+
+#: ``filter_detections`` hook of :meth:`LocalizationStack.step`: the radar's detections in,
+#: the detections the tracker and the localiser receive out.
+DetectionFilter = Callable[[Detections], Detections]
+
+
+@dataclass(frozen=True)
+class FrameResult:
+    """What one frame of the stack produced.
+
+    Attributes
+    ----------
+    detections : Detections or None
+        The radar's detections (after any ``filter_detections`` hook); None when the frame was
+        a fingerprint (radar and tracker bypassed, :meth:`LocalizationStack.localize`).
+    fingerprint : Fingerprint
+        The tracker's fingerprint (or the given one).
+    localizer_estimate : PoseEstimate
+        The localiser's (AMCL's or the grid filter's) estimate after this frame.
+    lut_estimate : PoseEstimate or None
+        The look-up table's answer to ``fingerprint`` (position only), if the stack has one.
+    estimate : PoseEstimate
+        The pose a consumer should use: the localiser's, or with a look-up table its position
+        with the localiser's heading.
+    elapsed_s : dict
+        Wall time of the stages run in this frame: ``radar``, ``tracking_localization``, ``lut``.
+    """
+
+    detections: Detections | None
+    fingerprint: Fingerprint
+    localizer_estimate: PoseEstimate
+    lut_estimate: PoseEstimate | None
+    estimate: PoseEstimate
+    elapsed_s: dict[str, float] = field(default_factory=dict, compare=False)
+
+
+class LocalizationStack:
+    """Radar, LRP tracker, localiser and optional look-up table of one robot, frame by frame.
+
+    Parameters
+    ----------
+    world : World
+        The surveyed world: the map the tracker and the localiser use.
+    sensor : RadarSensor
+        The radar on the surveyed layout (see :meth:`set_radar_layout` for another one).
+    tracker : LrpTracker
+    localizer : Amcl or GridFilter
+    lut : LookupTable, optional
+        With it, the consumer's estimate is the table's position (see :class:`FrameResult`).
+    dt_s : float
+        Frame period (the tracker's prediction step).
+    measurements : {"detections", "tracks"}
+        What the localiser weighs; it fixes the order (module docstring).
+    map_aided : bool
+        Identify the reflectors with the localiser's cloud (else RCS, motion and track
+        quality only, as in the paper).
+    use_ego : bool
+        Give the tracker the odometry (static-point prediction, Doppler bound); else the
+        paper's constant-velocity model.
+
+    Notes
+    -----
+    Per-robot state, all reset by :meth:`reset` (what a batch of robots has one of each):
+
+    - the tracker's tracks (:class:`LrpTracker`) and the window test of its last frame;
+    - the localiser's particles ``(P, 3)`` and weights ``(P,)`` (AMCL; a belief grid for the
+      grid filter), its recovery averages and the predicted cloud of its last update;
+    - :attr:`converged`, whether the localiser's estimate of the previous frame had converged
+      (with ``tracks`` it decides whether the cloud may rank the tracks or only veto them);
+    - :attr:`sensor`, the radar of this episode (the surveyed layout, or a moved one).
+
+    Everything else (world, configuration, look-up table, the surveyed sensor) is shared and
+    read-only. No state is keyed on the identity of an input object: every value a stage
+    reuses within a frame is passed along explicitly.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        sensor: RadarSensor,
+        tracker: LrpTracker,
+        localizer: Localizer,
+        lut: LookupTable | None = None,
+        *,
+        dt_s: float,
+        measurements: str = "detections",
+        map_aided: bool = True,
+        use_ego: bool = True,
+    ) -> None:
+        if measurements not in ("detections", "tracks"):
+            raise ValueError(
+                f"localization.measurements must be detections or tracks, got {measurements!r}"
+            )
+        if not dt_s > 0:
+            raise ValueError(f"task.frame_period_s must be positive, got {dt_s}")
+        self.world = world
+        self.surveyed_sensor = sensor
+        self.sensor = sensor
+        self.tracker = tracker
+        self.localizer = localizer
+        self.lut = lut
+        self.dt_s = float(dt_s)
+        self.measurements = measurements
+        self.map_aided = map_aided
+        self.use_ego = use_ego
+        self.converged = False
+
+    @classmethod
+    def from_config(
+        cls,
+        world: World,
+        cfg: ScenarioConfig,
+        *,
+        map_aided: bool = True,
+        use_ego: bool = True,
+    ) -> LocalizationStack:
+        """The stack a validated scenario describes.
+
+        The localiser follows ``localization.method`` (``grid``: the histogram filter, else
+        AMCL); ``method: lut`` adds the look-up table (AMCL still runs: its cloud identifies
+        the reflectors and its heading completes the table's position).
+        """
+        loc = cfg.localization
+        lut = (
+            LookupTable(world, loc.lut_resolution_m, loc.lut_grid_m)
+            if loc.method == "lut"
+            else None
+        )
+        return cls(
+            world,
+            RadarSensor(world, cfg.radar),
+            LrpTracker.from_world(world, cfg.tracking),
+            make_localizer(world, loc),
+            lut,
+            dt_s=cfg.task.frame_period_s,
+            measurements=loc.measurements,
+            map_aided=map_aided,
+            use_ego=use_ego,
+        )
+
+    # ------------------------------------------------------------------ per-robot state
+    def reset(self, rng: np.random.Generator, known_pose: np.ndarray | None = None) -> None:
+        """Start a run: no tracks, a fresh cloud, the surveyed radar.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator
+            The localiser's initial cloud is drawn from it.
+        known_pose : ndarray (3,), optional
+            Start pose for a Gaussian start (``localization.init: gaussian``); None spreads
+            the cloud over the room (global localisation).
+        """
+        self.tracker.reset()
+        self.localizer.reset(rng, known_pose)
+        self.converged = False
+        self.sensor = self.surveyed_sensor
+
+    def set_radar_layout(self, layout: ReflectorLayout) -> None:
+        """Let the radar see ``layout`` until the next :meth:`reset`; the map stays surveyed.
+
+        For a perturbed episode (a displaced reflector): the tracker and the localiser keep
+        the surveyed layout, only the radar channel changes.
+        """
+        if layout is self.world.layout:
+            self.sensor = self.surveyed_sensor
+        else:
+            world = replace(self.world, layout=layout)
+            self.sensor = RadarSensor(world, self.surveyed_sensor.config)
+
+    # ------------------------------------------------------------------ one frame
+    def step(
+        self,
+        true_pose: np.ndarray,
+        velocity_xy: np.ndarray,
+        odometry: np.ndarray,
+        rng: np.random.Generator,
+        *,
+        hidden: np.ndarray | None = None,
+        extra_scatterers: tuple[np.ndarray, np.ndarray] | None = None,
+        filter_detections: DetectionFilter | None = None,
+    ) -> FrameResult:
+        """One radar frame at the true pose, through every stage.
+
+        Parameters
+        ----------
+        true_pose : ndarray (3,)
+            Where the robot really is (x_m, y_m, theta_rad): where the radar measures.
+        velocity_xy : ndarray (2,)
+            The robot's true velocity (m/s), for the Doppler and the wheel speed.
+        odometry : ndarray (3,)
+            The reported odometry ``(rot1, trans, rot2)`` since the previous frame (zeros in
+            the first), e.g. from :func:`~lrp_gym.world.robot.noisy_odometry`.
+        rng : numpy.random.Generator
+            Radar noise and the localiser's draws, in that order; the tracker draws none.
+        hidden, extra_scatterers
+            Passed to :meth:`RadarSensor.measure` (reflectors hidden this frame, extra point
+            scatterers), e.g. from a perturbation.
+        filter_detections : callable, optional
+            Applied to the radar's detections before the tracker sees them (dropped or added
+            detections); it may draw from ``rng``.
+        """
+        t0 = time.perf_counter()
+        detections = self.measure(true_pose, velocity_xy, rng, hidden, extra_scatterers)
+        if filter_detections is not None:
+            detections = filter_detections(detections)
+        radar_s = time.perf_counter() - t0
+        ego = EgoMotion.from_velocity(velocity_xy, true_pose[2], odometry)
+        result = self.localize(detections, ego, rng)
+        return replace(result, elapsed_s={"radar": radar_s, **result.elapsed_s})
+
+    def measure(
+        self,
+        true_pose: np.ndarray,
+        velocity_xy: np.ndarray,
+        rng: np.random.Generator,
+        hidden: np.ndarray | None = None,
+        extra_scatterers: tuple[np.ndarray, np.ndarray] | None = None,
+    ) -> Detections:
+        """The radar stage alone: this episode's sensor at the true pose (see :meth:`step`)."""
+        return self.sensor.measure(
+            true_pose, velocity_xy, rng, hidden=hidden, extra_scatterers=extra_scatterers
+        )
+
+    def localize(
+        self, frame: Detections | Fingerprint, ego: EgoMotion, rng: np.random.Generator
+    ) -> FrameResult:
+        """The stages after the radar, on given detections or a given fingerprint.
+
+        With :class:`Detections` (e.g. another stack's radar frame, or a radar frame measured
+        before the odometry was drawn): tracker and localiser in the configured order. With a
+        :class:`Fingerprint` (e.g. exact distances): the localiser weighs it directly, the
+        tracker is bypassed.
+        """
+        t0 = time.perf_counter()
+        if isinstance(frame, Fingerprint):
+            detections, fingerprint = None, frame
+            estimate = self.localizer.update(ego.odometry, frame, rng)
+        else:
+            detections = frame
+            fingerprint, estimate = self._track_and_localize(frame, ego, rng)
+        self.converged = bool(estimate.converged)
+        t1 = time.perf_counter()
+        lut_estimate, pose_estimate = self._with_lut(fingerprint, estimate)
+        elapsed = {"tracking_localization": t1 - t0, "lut": time.perf_counter() - t1}
+        return FrameResult(detections, fingerprint, estimate, lut_estimate, pose_estimate, elapsed)
+
+    # ------------------------------------------------------------------ internals
+    def _with_lut(
+        self, fingerprint: Fingerprint, estimate: PoseEstimate
+    ) -> tuple[PoseEstimate | None, PoseEstimate]:
+        """(The table's answer, the consumer's estimate)."""
+        if self.lut is None:
+            return None, estimate
+        lut_est = self.lut.query(fingerprint)
+        # The table knows no heading: keep the localiser's.
+        pose = np.array([lut_est.pose[0], lut_est.pose[1], estimate.pose[2]])
+        conv = lut_est.converged
+        return lut_est, PoseEstimate(pose, lut_est.covariance, 0, 0.0, conv, float(conv), 1)
+
+    def _prior(
+        self, particles_xy: np.ndarray, weights: np.ndarray, confident: bool
+    ) -> DistancePrior:
+        """The reflector distances a cloud predicts: map-aided identification for the tracker."""
+        w = self.world
+        return DistancePrior.from_particles(
+            w.layout, w.mount_height_m, particles_xy, weights, confident=confident
+        )
+
+    def _track_and_localize(
+        self, detections: Detections, ego: EgoMotion, rng: np.random.Generator
+    ) -> tuple[Fingerprint, PoseEstimate]:
+        """Tracker and localiser on one frame, in the order ``measurements`` allows."""
+        tracker, loc = self.tracker, self.localizer
+        odometry = ego.odometry
+        tracker_ego = ego if self.use_ego else None
+        # Augmented MCL's fit statistic: on what the localiser weighs, or on the persistent
+        # tracks, scored on the same predicted cloud once the tracker has run.
+        own_fit = loc.cfg.recovery_measurements == "detections"
+        if self.measurements == "detections":
+            window = tracker.classifier.candidates(detections)  # one window test, used twice
+            gated = tracker.gated_fingerprint(detections, window)
+            weighed = gated if gated.count else None
+            estimate = loc.update(odometry, weighed, rng, recovery=own_fit, speed_mps=ego.speed_mps)
+            # This frame's posterior; it ranks the tracks only once converged (right after a
+            # global start its heaviest mode may be a mirror image).
+            prior = None
+            if self.map_aided:
+                prior = self._prior(loc.particles[:, :2], loc.weights, estimate.converged)
+            fingerprint = tracker.update(detections, self.dt_s, tracker_ego, prior, window)
+        else:
+            # The cloud before this frame's update, moved by the odometry.
+            prior = None
+            if self.map_aided:
+                moved = apply_odometry(loc.particles, odometry)
+                prior = self._prior(moved[:, :2], loc.weights, self.converged)
+            fingerprint = tracker.update(detections, self.dt_s, tracker_ego, prior)
+            estimate = loc.update(
+                odometry, fingerprint if fingerprint.count else None, rng, recovery=own_fit
+            )
+        if not own_fit:
+            # Tracks updated in this frame only: a coasting track follows the odometry, as a
+            # lost filter's cloud does, and would keep its fit up after a kidnap.
+            loc.update_recovery(tracker.persistent_fingerprint(max_misses=0))
+        return fingerprint, estimate
