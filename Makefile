@@ -39,6 +39,7 @@ bench: install
 lint: install
 	$(VENV)/bin/ruff check lrp_gym agents tests
 	$(VENV)/bin/ruff format --check lrp_gym agents tests
+	$(VENV)/bin/mypy
 
 format: install
 	$(VENV)/bin/ruff format lrp_gym agents tests

@@ -103,7 +103,7 @@ def write_stats(vn: Any, path: str | Path) -> Path:
     return path
 
 
-def read_stats(path: str | Path, option: str = "--model") -> dict[str, Any]:
+def read_stats(path: str | Path, option: str = "model_path") -> dict[str, Any]:
     """Read and check a statistics JSON; :class:`InputError` naming ``option`` if it is bad."""
     try:
         doc = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -173,7 +173,7 @@ def save_model(model: Any, zip_path: str | Path) -> list[Path]:
 
 
 # --------------------------------------------------------------------------- model zip
-def read_zip_data(path: Path, option: str = "--model") -> dict[str, Any]:
+def read_zip_data(path: Path, option: str = "model_path") -> dict[str, Any]:
     """The ``data`` entry of an SB3 zip as plain JSON (nothing is unpickled)."""
     try:
         with zipfile.ZipFile(path) as z:
@@ -265,7 +265,7 @@ def safe_custom_objects(
     path: Path,
     spaces: tuple[Any, Any] = (None, None),
     schedules: dict[str, Any] | None = None,
-    option: str = "--model",
+    option: str = "model_path",
 ) -> dict[str, Any]:
     """A replacement for every pickled value of ``data``; refuse what has none."""
     from stable_baselines3.common.buffers import RolloutBuffer
@@ -308,7 +308,7 @@ def load_ppo_safely(
     spaces: tuple[Any, Any] = (None, None),
     env: Any = None,
     schedules: dict[str, Any] | None = None,
-    option: str = "--model",
+    option: str = "model_path",
     **kwargs: Any,
 ) -> Any:
     """``PPO.load`` with every pickled field replaced (see :func:`safe_custom_objects`).

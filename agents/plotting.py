@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from lrp_gym.output import save_figure
+
 
 def trajectory_figure(
     world: Any, true_xy: np.ndarray, est_xy: np.ndarray, waypoints_m: np.ndarray, title: str = ""
@@ -33,12 +35,21 @@ def trajectory_figure(
     fig, ax = plt.subplots(figsize=(7.6, 6.0 * ly / lx + 0.4))
     draw_room(ax, world, marker_size=110)
     ax.plot(*waypoints_m.T, "o--", color="0.5", ms=4, lw=1, label="waypoints")
+    goal_x, goal_y = waypoints_m[-1]
     ax.scatter(
-        *waypoints_m[-1], marker="*", s=250, color="gold", edgecolor="k", zorder=6, label="goal"
+        goal_x, goal_y, marker="*", s=250, color="gold", edgecolor="k", zorder=6, label="goal"
     )
     ax.plot(*true_xy.T, "-", color="tab:green", lw=2, label="true path")
     ax.plot(*est_xy.T, ".-", color="tab:purple", lw=1, ms=4, alpha=0.8, label="estimated path")
-    ax.scatter(*true_xy[0], s=60, color="tab:green", edgecolor="k", zorder=7, label="start")
+    ax.scatter(
+        true_xy[0, 0],
+        true_xy[0, 1],
+        s=60,
+        color="tab:green",
+        edgecolor="k",
+        zorder=7,
+        label="start",
+    )
     ax.set_xlim(-0.2, lx + 0.2)
     ax.set_ylim(-0.2, ly + 0.2)
     ax.set_aspect("equal")
@@ -60,6 +71,4 @@ def save_trajectory(
     title: str = "",
 ) -> Path:
     """Write :func:`trajectory_figure` to ``path`` (atomically)."""
-    from lrp_gym.commands._common import save_figure
-
     return save_figure(trajectory_figure(world, true_xy, est_xy, waypoints_m, title), path)

@@ -73,7 +73,7 @@ def make_venv(
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
     if vec_env not in ("subproc", "dummy"):
-        raise InputError(f"--config: vec_env must be 'subproc' or 'dummy', got {vec_env!r}")
+        raise InputError(f"config: vec_env must be 'subproc' or 'dummy', got {vec_env!r}")
     subproc = vec_env == "subproc" and n_envs > 1
     return make_vec_env(
         gym_id(env_id),
@@ -91,18 +91,18 @@ def _prepare_run_dir(run_dir: Path, resume: bool, force: bool) -> list[tuple[int
     """Check the run folder against --resume/--force; with --force clear the old run's outputs."""
     checkpoints = list_checkpoints(run_dir)
     if resume and force:
-        raise InputError("--force: cannot be combined with --resume")
+        raise InputError("force: cannot be combined with resume")
     if resume:
         if not checkpoints:
-            raise InputError(f"--resume: no checkpoint in {run_dir / 'checkpoints'}")
+            raise InputError(f"resume: no checkpoint in {run_dir / 'checkpoints'}")
         return checkpoints
     present = [name for name in RUN_OUTPUTS if (run_dir / name).exists()]
     if present and not force:
         kind = "a finished" if (run_dir / "final" / "model.zip").is_file() else "a started"
         what = f"{kind} run of {checkpoints[0][0]} steps" if checkpoints else "an earlier run"
         raise InputError(
-            f"--out: {run_dir} holds {what}; pass --resume to continue it, --force to "
-            "overwrite it, or another --out"
+            f"out: {run_dir} holds {what}; continue it (resume), overwrite it (force), or "
+            "choose another folder"
         )
     for name in present:  # --force: only what a run writes, nothing else in the folder
         path = run_dir / name
@@ -128,19 +128,19 @@ def _resume_model(checkpoints: list[tuple[int, Path]], venv: Any, hp: dict, run_
             else "; delete that checkpoint to resume from an older one"
         )
         raise InputError(
-            f"--resume: {path} has no normalisation statistics ({stats_path_for(path).name}); "
+            f"resume: {path} has no normalisation statistics ({stats_path_for(path).name}); "
             f"refusing to train on without them{hint}"
         )
-    doc = read_stats(stats, "--resume")
+    doc = read_stats(stats, "resume")
     if hp["normalize"] is not None and not doc["norm_obs"]:
-        raise InputError(f"--resume: {stats} holds no statistics, but the config normalises")
+        raise InputError(f"resume: {stats} holds no statistics, but the config normalises")
     if doc["norm_obs"] or doc["norm_reward"]:
         venv = _vn_from_stats(doc, venv)
     model = load_ppo_safely(
         path,
         env=venv,
         schedules=schedules(hp["ppo"]),
-        option="--resume",
+        option="resume",
         tensorboard_log=str(run_dir / "tb"),
     )
     return model, venv, steps
@@ -227,12 +227,12 @@ def train(
     hp = split_hyperparams(raw)
     requested = int(timesteps) if timesteps is not None else hp["n_timesteps"]
     if requested < 1:
-        raise InputError(f"--timesteps: must be at least 1, got {requested}")
+        raise InputError(f"timesteps: must be at least 1, got {requested}")
     run_dir = Path(out) if out is not None else Path("runs") / f"ppo-{env_id}-s{seed}"
     checkpoints = _prepare_run_dir(run_dir, resume, force)
     if checkpoints and requested <= checkpoints[0][0]:
         raise InputError(
-            f"--timesteps: the run already has {checkpoints[0][0]} steps; give a larger total "
+            f"timesteps: the run already has {checkpoints[0][0]} steps; give a larger total "
             "to extend it"
         )
     model, venv, eval_venv, start = _build(hp, env_id, seed, verbose, run_dir, checkpoints)
@@ -240,7 +240,7 @@ def train(
     info = _start_info(config, env_id, raw, hp, run_dir, seed, requested, start, model, resume)
     if info["target_timesteps"] != requested:
         log(
-            f"--timesteps: {requested} rounded up to {info['target_timesteps']} (PPO trains on "
+            f"timesteps: {requested} rounded up to {info['target_timesteps']} (PPO trains on "
             f"whole rollouts of n_steps {model.n_steps} x n_envs {model.n_envs})"
         )
     return _run(model, venv, eval_venv, hp, info, progress_bar, log)

@@ -30,15 +30,15 @@ EXTRA_KEYS = ("vec_env", "eval_env_id", "eval_freq", "n_eval_episodes", "checkpo
 
 def _read_yaml(path: Path) -> Any:
     if not path.is_file():
-        raise InputError(f"--config: no such file: {path}")
+        raise InputError(f"config: no such file: {path}")
     try:
         return yaml.safe_load(path.read_text(encoding="utf-8"))
     except UnicodeDecodeError as exc:
-        raise InputError(f"--config: {path} is not UTF-8 text: {exc.reason}") from None
+        raise InputError(f"config: {path} is not UTF-8 text: {exc.reason}") from None
     except OSError as exc:
-        raise InputError(f"--config: cannot read {path}: {exc.strerror or exc}") from None
+        raise InputError(f"config: cannot read {path}: {exc.strerror or exc}") from None
     except yaml.YAMLError as exc:
-        raise InputError(f"--config: {path} is not valid YAML: {exc}") from None
+        raise InputError(f"config: {path} is not valid YAML: {exc}") from None
 
 
 def load_hyperparams(
@@ -57,27 +57,26 @@ def load_hyperparams(
     path = Path(path) if path is not None else DEFAULT_CONFIG
     data = _read_yaml(path)
     if not isinstance(data, dict) or not any(k != LRP_KEY for k in data):
-        raise InputError(f"--config: {path} must map env ids to hyperparameters")
+        raise InputError(f"config: {path} must map env ids to hyperparameters")
     sections = [str(k) for k in data if k != LRP_KEY]
     env_id = env_id or sections[0]
     if env_id not in sections:
         raise InputError(
-            f"--env: {path} has no section {env_id!r}; sections: {', '.join(sections)}"
+            f"env_id: {path} has no section {env_id!r}; sections: {', '.join(sections)}"
         )
     section, extras = data[env_id], (data.get(LRP_KEY) or {})
     if not isinstance(extras, dict):
-        raise InputError(f"--config: {LRP_KEY} in {path} must map env ids to settings")
+        raise InputError(f"config: {LRP_KEY} in {path} must map env ids to settings")
     extra = extras.get(env_id) or {}
     for what, value in ((env_id, section), (f"{LRP_KEY}.{env_id}", extra)):
         if not isinstance(value, dict):
             raise InputError(
-                f"--config: section {what!r} of {path} must be a mapping, "
-                f"got {type(value).__name__}"
+                f"config: section {what!r} of {path} must be a mapping, got {type(value).__name__}"
             )
     unknown = sorted(set(extra) - set(EXTRA_KEYS))
     if unknown:
         raise InputError(
-            f"--config: unknown {LRP_KEY}.{env_id} setting(s) {', '.join(unknown)} in {path}; "
+            f"config: unknown {LRP_KEY}.{env_id} setting(s) {', '.join(unknown)} in {path}; "
             f"known: {', '.join(EXTRA_KEYS)}"
         )
     return str(env_id), {**section, **extra}
@@ -100,7 +99,7 @@ def _eval_expr(text: str, what: str) -> Any:
             text, {"__builtins__": {}}, {"dict": dict, "nn": nn, "True": True, "False": False}
         )  # noqa: S307
     except Exception as exc:
-        raise InputError(f"--config: cannot parse {what} {text!r}: {exc}") from None
+        raise InputError(f"config: cannot parse {what} {text!r}: {exc}") from None
 
 
 def split_hyperparams(hp: dict[str, Any]) -> dict[str, Any]:
@@ -117,9 +116,9 @@ def split_hyperparams(hp: dict[str, Any]) -> dict[str, Any]:
         n_envs = int(hp.pop("n_envs", 1))
         n_timesteps = int(float(hp.pop("n_timesteps", 1e5)))
     except (TypeError, ValueError, OverflowError) as exc:
-        raise InputError(f"--config: n_envs / n_timesteps must be numbers: {exc}") from None
+        raise InputError(f"config: n_envs / n_timesteps must be numbers: {exc}") from None
     if n_envs < 1:
-        raise InputError(f"--config: n_envs must be at least 1, got {n_envs}")
+        raise InputError(f"config: n_envs must be at least 1, got {n_envs}")
     out: dict[str, Any] = {
         "n_envs": n_envs,
         "n_timesteps": n_timesteps,

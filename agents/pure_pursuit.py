@@ -10,7 +10,8 @@ out). While the heading is unknown the bearing to any target is meaningless, so 
 straight ahead: consistent motion is what lets the particle filter resolve the heading. When
 the lookahead point lies far to the side or behind, the robot turns on the spot.
 
-It exposes the Stable-Baselines3 ``predict`` signature so the evaluator treats every agent alike.
+It is a :class:`~lrp_gym.experiments.episodes.Policy` (``reset``, ``act``) and also exposes the
+Stable-Baselines3 ``predict`` signature.
 """
 
 from __future__ import annotations
@@ -20,10 +21,7 @@ from typing import Any
 
 import numpy as np
 
-# Fixed part of the ``estimated`` / ``oracle`` observation layout (lrp_gym.envs.observations).
-_STD = slice(4, 7)
-_CONVERGED = 7
-_FIXED_LEN = 12  # 8 pose/std/converged + 2 goal + 2 last action
+from lrp_gym.envs.observations import EstimatedPoseObservation
 
 
 @dataclass(frozen=True)
@@ -137,15 +135,19 @@ class PurePursuitPolicy:
         """Speed (m/s) and turn rate (rad/s) for one flat observation."""
         c = self.config
         obs = np.asarray(obs, dtype=float)
-        n = (obs.shape[-1] - _FIXED_LEN) // 2
-        if obs.ndim != 1 or n < 1 or obs.shape[0] != _FIXED_LEN + 2 * n:
+        try:
+            if obs.ndim != 1:
+                raise ValueError
+            n = EstimatedPoseObservation.n_waypoints_of(obs.shape[0])
+        except ValueError:
             raise ValueError(
                 f"pure pursuit needs the flat 'estimated'/'oracle' observation, got shape {obs.shape}"
-            )
-        std = obs[_STD]
-        waypoints = obs[8 : 8 + 2 * n].reshape(n, 2)
-        goal = obs[8 + 2 * n : 10 + 2 * n]
-        last_speed = max(float(obs[-2]), 0.0) * c.max_speed_mps
+            ) from None
+        f = EstimatedPoseObservation.fields(n)
+        std = obs[f["std"]]
+        waypoints = obs[f["waypoints"]].reshape(n, 2)
+        goal = obs[f["goal"]]
+        last_speed = max(float(obs[f["last_action"]][0]), 0.0) * c.max_speed_mps
 
         lookahead = c.lookahead_m + c.lookahead_time_s * last_speed
         target = lookahead_point(np.vstack([waypoints, goal]), lookahead)
@@ -160,7 +162,7 @@ class PurePursuitPolicy:
             # Heading unknown: the bearing to the target is meaningless. Creep straight so the
             # filter sees consistent motion and can resolve the heading.
             return c.creep_speed_mps, 0.0
-        if obs[_CONVERGED] < 0.5:
+        if obs[f["converged"]][0] < 0.5:
             frac = 0.0
         v = c.creep_speed_mps + frac * (c.max_speed_mps - c.creep_speed_mps)
         approach = max(c.approach_gain * goal_dist / c.frame_period_s, c.min_approach_speed_mps)
@@ -196,3 +198,9 @@ class PurePursuitPolicy:
             out[i] = (v / c.max_speed_mps, w / c.max_turn_rate_rps)
         np.clip(out, -1.0, 1.0, out=out)
         return (out[0] if obs.ndim == 1 else out), state
+
+    def reset(self) -> None:
+        """The controller is stateless (the previous action comes in the observation)."""
+
+    def act(self, observation: np.ndarray) -> np.ndarray:
+        return self.predict(observation)[0]

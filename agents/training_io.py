@@ -10,20 +10,20 @@ from typing import Any
 
 import numpy as np
 
+from agents.evaluate import load_ppo
 from lrp_gym.errors import InputError
+from lrp_gym.experiments.episodes import make_eval_env, public, run_episodes
+from lrp_gym.output import save_figure
+from lrp_gym.output import write_json as _write
 
 
 def write_json(path: Path, data: dict[str, Any]) -> Path:
-    """Write JSON atomically (see :func:`lrp_gym.commands._common.write_json`)."""
-    from lrp_gym.commands._common import write_json as _write
-
+    """Write JSON atomically (see :func:`lrp_gym.output.write_json`)."""
     return _write(data, path)
 
 
 def plot_learning_curve(run_dir: str | Path, out_png: str | Path, title: str = "PPO") -> Path:
     """Write the learning curve of a run (:func:`learning_curve_figure`) to ``out_png``."""
-    from lrp_gym.commands._common import save_figure
-
     npz = Path(run_dir) / "eval" / "evaluations.npz"
     if not npz.is_file():
         raise InputError(f"no learning curve: {npz} is missing")
@@ -105,16 +105,15 @@ def export_model(
     which : {"best", "final"}
         EvalCallback's best model or the model at the end of training.
     """
-    from agents.evaluate import evaluate, load_ppo, make_eval_env, public
     from agents.model_io import find_stats
 
     run_dir, dest = Path(run_dir), Path(dest_dir)
     src = run_dir / ("best/best_model.zip" if which == "best" else "final/model.zip")
     if not src.is_file():
-        raise InputError(f"--export: {src} does not exist (has the run finished?)")
+        raise InputError(f"run_dir: {src} does not exist (has the run finished?)")
     stats = find_stats(src)
     if stats is None:
-        raise InputError(f"--export: {src} has no normalisation statistics beside it")
+        raise InputError(f"run_dir: {src} has no normalisation statistics beside it")
     dest.mkdir(parents=True, exist_ok=True)
     for source, target in ((stats, dest / "vecnormalize.json"), (src, dest / f"{name}.zip")):
         tmp = target.with_name(target.name + ".tmp")
@@ -123,7 +122,7 @@ def export_model(
     env = make_eval_env("ppo", eval_env_id)
     t0 = time.perf_counter()
     policy = load_ppo(dest / f"{name}.zip", (env.observation_space, env.action_space))
-    summary = public(evaluate(policy, env, episodes, seed))
+    summary = public(run_episodes(policy, env, episodes, seed))
     env.close()
     summary.pop("per_episode", None)
     info_path = run_dir / "run_info.json"

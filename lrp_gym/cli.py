@@ -75,7 +75,8 @@ def usage_message(exc: typer.TyperException) -> str:
     if param is not None or hint is not None:
         if hint is None:
             opts = getattr(param, "opts", None) or []
-            hint = " / ".join(opts) if opts and opts[0].startswith("-") else param.name.upper()
+            name = getattr(param, "name", None) or ""
+            hint = " / ".join(opts) if opts and opts[0].startswith("-") else name.upper()
         if not isinstance(hint, str):
             hint = " / ".join(hint)
         text = f"{hint.replace(chr(39), '')}: {exc.message}"

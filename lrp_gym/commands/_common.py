@@ -15,17 +15,18 @@ import json
 import math
 import os
 import sys
-import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import typer
 from rich.console import Console
 from typer.core import TyperArgument, TyperCommand, TyperOption
 
 from lrp_gym.errors import InputError
+from lrp_gym.output import atomic_path, save_figure, to_jsonable, write_json, write_text
+
+__all__ = ["atomic_path", "save_figure", "to_jsonable", "write_json", "write_text"]
 
 console = Console()
 err_console = Console(stderr=True)
@@ -67,18 +68,19 @@ class ScenarioCommand(TyperCommand):
         self.params.append(
             TyperOption(
                 param_decls=["--scenario", _ALIAS],
-                type_descriptor=arg.type_descriptor,  # a plain string, as the argument
+                type_descriptor=arg.type_descriptor,  # type: ignore[attr-defined]  # typer's
                 default=None,
                 metavar="SCENARIO",
                 hidden=True,
             )
         )
 
-    def parse_args(self, ctx: typer.Context, args: list[str]) -> list[str]:
+    def parse_args(self, ctx: typer.Context, args: list[str]) -> list[str]:  # type: ignore[override]
         rest = super().parse_args(ctx, args)
         alias = ctx.params.pop(_ALIAS, None)
         if alias is not None:
-            given = ctx.get_parameter_source("scenario").name != "DEFAULT"
+            source = ctx.get_parameter_source("scenario")
+            given = source is not None and source.name != "DEFAULT"
             if given and ctx.params["scenario"] != alias:
                 raise InputError(
                     f"--scenario: SCENARIO given twice ({ctx.params['scenario']!r} and "
@@ -92,7 +94,7 @@ _ALIAS = "scenario_alias"
 
 
 class _ScenarioArgument(TyperArgument):
-    def display_type_rich(self, ctx: typer.Context) -> str | None:
+    def display_type_rich(self, ctx: typer.Context) -> str | None:  # type: ignore[override]
         return None  # the metavar SCENARIO and the help say what it is; no "<str>"
 
 
@@ -147,6 +149,22 @@ def choice(value: str | None, options: Sequence[str], flag: str) -> str | None:
     close = difflib.get_close_matches(value, options, n=1, cutoff=0.5)
     hint = f"; did you mean {close[0]!r}?" if close else ""
     raise InputError(f"{flag}: unknown {value!r}{hint} (choose from {', '.join(options)})")
+
+
+@contextlib.contextmanager
+def as_flags(**flags: str) -> Iterator[None]:
+    """Turn a library ``ValueError("name: ...")`` into an InputError naming the CLI flag.
+
+    The library names its own arguments (``candidates``, ``model_path``); only the commands
+    know which flag sets each one, e.g. ``as_flags(model_path="--model")``.
+    """
+    try:
+        yield
+    except ValueError as exc:
+        name, sep, rest = str(exc).partition(": ")
+        if sep and name in flags:
+            raise InputError(f"{flags[name]}: {rest}") from None
+        raise
 
 
 def at_least(value: float | None, low: float, flag: str) -> None:
@@ -303,26 +321,6 @@ def check_distinct(*paths: Path | None) -> None:
 
 
 # --------------------------------------------------------------------------- output
-def to_jsonable(value: Any) -> Any:
-    """Numpy scalars and arrays to plain Python; NaN and inf to None (valid JSON)."""
-    if isinstance(value, dict):
-        return {str(k): to_jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [to_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return to_jsonable(value.tolist())
-    if isinstance(value, (np.floating, float)):
-        f = float(value)
-        return f if math.isfinite(f) else None
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, np.bool_):
-        return bool(value)
-    if isinstance(value, Path):
-        return str(value)
-    return value
-
-
 def print_json(data: Any) -> None:
     """Print one JSON document to stdout (nothing else goes to stdout with --json)."""
     sys.stdout.write(json.dumps(to_jsonable(data), indent=2) + "\n")
@@ -332,45 +330,6 @@ def print_json(data: Any) -> None:
 def wrote(path: str | Path, quiet: bool = False) -> None:
     """The one line every command prints per file written (to stderr when stdout is JSON)."""
     (err_console if quiet else console).print(f"wrote {path}", highlight=False, markup=False)
-
-
-@contextlib.contextmanager
-def atomic_path(path: str | Path) -> Iterator[Path]:
-    """A temporary file next to ``path``, renamed onto it on success and removed on failure."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    tmp = Path(name)
-    try:
-        yield tmp
-        tmp.replace(path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
-def write_text(text: str, path: str | Path) -> Path:
-    """Write text atomically."""
-    with atomic_path(path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-    return Path(path)
-
-
-def write_json(data: Any, path: str | Path) -> Path:
-    """Write JSON atomically: a temporary file renamed into place, so the output is whole."""
-    return write_text(json.dumps(to_jsonable(data), indent=2) + "\n", path)
-
-
-def save_figure(fig: Any, path: str | Path) -> Path:
-    """Save a matplotlib figure atomically and close it."""
-    import matplotlib.pyplot as plt
-
-    try:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=120, bbox_inches="tight", format=Path(path).suffix[1:] or "png")
-    finally:
-        plt.close(fig)
-    return Path(path)
 
 
 def table(title: str, columns: Sequence[str], left: int = 0) -> Any:

@@ -24,8 +24,8 @@ from lrp_gym.commands._common import (
 from lrp_gym.errors import InputError
 
 DEMO_ENV = "LRPRadarNav-v0"
-COLUMNS = ("step", "true x [m]", "true y [m]", "est x [m]", "est y [m]", "error [m]")
-COLUMNS += ("std [m]", "dets", "conv")
+COLUMNS: tuple[str, ...] = ("step", "true x [m]", "true y [m]", "est x [m]", "est y [m]")
+COLUMNS += ("error [m]", "std [m]", "dets", "conv")
 
 
 def demo(
@@ -59,6 +59,8 @@ def demo(
         raise InputError(f"--steps: must be at least 1, got {steps}")
     choice(fidelity, FIDELITIES, "--fidelity")
     folder = check_output(out, "--out", directory=True)
+    if folder is None:
+        raise InputError("--out: give a folder")
     for name in ("trajectory.png", "summary.json"):
         if (folder / name).is_dir():
             raise InputError(f"--out: {folder / name} is a folder, expected a file name")
@@ -67,6 +69,7 @@ def demo(
 
     import lrp_gym  # noqa: F401  (registers the env ids)
     from agents.plotting import save_trajectory
+    from lrp_gym.experiments.episodes import nav_env
 
     env = gym.make(
         DEMO_ENV,
@@ -77,7 +80,8 @@ def demo(
     )
     try:
         rows, tracks, info = _drive(env, seed)
-        summary = _summary(env.unwrapped, scenario, seed, tracks, info)
+        base = nav_env(env)
+        summary = _summary(base, scenario, seed, tracks, info)
     finally:
         env.close()
     if not json_out:
@@ -93,9 +97,9 @@ def demo(
         f"{'reached the goal' if summary['success'] else 'did not reach the goal'} in "
         f"{n} frames, mean error {summary['mean_loc_error_m']:.3f} m"
     )
-    base = env.unwrapped
+    waypoints_m = summary["waypoints_m"]
     png = save_trajectory(
-        folder / "trajectory.png", base.world, tracks[0], tracks[1], base.path.waypoints_m, title
+        folder / "trajectory.png", base.world, tracks[0], tracks[1], waypoints_m, title
     )
     wrote(png, quiet=json_out)
     wrote(write_json(summary, folder / "summary.json"), quiet=json_out)
@@ -105,12 +109,14 @@ def _drive(env, seed: int):
     """Run one episode; per-step table rows, (true, estimated) xy arrays and the last info."""
     import numpy as np
 
-    from agents.evaluate import LOCALISED_M
     from agents.pure_pursuit import PurePursuitPolicy
+    from lrp_gym.localization.metrics import LOCALISED_M
 
     policy = PurePursuitPolicy.from_env(env)
     obs, info = env.reset(seed=seed)
-    true_xy, est_xy, rows, errors = [info["true_pose"][:2]], [info["est_pose"][:2]], [], []
+    true_xy, est_xy = [info["true_pose"][:2]], [info["est_pose"][:2]]
+    rows: list[tuple[str, ...]] = []
+    errors: list[float] = []
     done = False
     while not done:
         action, _ = policy.predict(obs)
@@ -137,7 +143,8 @@ def _drive(env, seed: int):
 def _summary(base, scenario: str, seed: int, tracks, info) -> dict:
     import numpy as np
 
-    from agents.evaluate import LOCALISED_M, cross_track_m
+    from lrp_gym.experiments.episodes import cross_track_m
+    from lrp_gym.localization.metrics import LOCALISED_M
 
     true_xy, est_xy, err = tracks
     n = len(err)

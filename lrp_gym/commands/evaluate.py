@@ -1,13 +1,15 @@
-"""``lrp-gym evaluate``: any agent on fixed seeds, one metrics table (see :mod:`agents.evaluate`)."""
+"""``lrp-gym evaluate``: any agent on fixed seeds, one metrics table (see :mod:`lrp_gym.experiments.episodes`)."""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import typer
 
 from lrp_gym.commands._common import (
     FIDELITIES,
+    as_flags,
     check_distinct,
     check_output,
     choice,
@@ -32,21 +34,21 @@ AGENT_NAMES = ("pure-pursuit", "ppo", "random", "oracle")
 TASKS = ("path", "goal")
 
 
-def agent_option() -> typer.Option:
+def agent_option() -> Any:
     """``--agent`` (shared with robustness)."""
     return typer.Option(
         "pure-pursuit", "--agent", metavar="NAME", help=f"{' | '.join(AGENT_NAMES)}."
     )
 
 
-def model_option() -> typer.Option:
+def model_option() -> Any:
     """``--model`` (shared with robustness)."""
     return typer.Option(
         None, "--model", metavar="FILE.zip", help="PPO model zip (default: the shipped one)."
     )
 
 
-def env_option() -> typer.Option:
+def env_option() -> Any:
     """``--env``: the Gymnasium env id the agent drives in (shared with robustness)."""
     return typer.Option(
         None,
@@ -57,7 +59,7 @@ def env_option() -> typer.Option:
     )
 
 
-def task_option() -> typer.Option:
+def task_option() -> Any:
     """``--task path|goal`` (shared with robustness)."""
     return typer.Option(
         None,
@@ -68,7 +70,7 @@ def task_option() -> typer.Option:
     )
 
 
-def episodes_option(what: str = "Number of episodes") -> typer.Option:
+def episodes_option(what: str = "Number of episodes") -> Any:
     """``--episodes N`` (shared with robustness, same default)."""
     return typer.Option(20, "--episodes", metavar="N", help=f"{what} (seeds seed, seed+1, ...).")
 
@@ -114,20 +116,29 @@ def evaluate(
     check_distinct(out_path, gif_path, plot_path)
     from agents import evaluate as ev
     from lrp_gym.config import deep_merge
+    from lrp_gym.experiments import episodes as ep
 
     over = overrides(scenario, sets, fidelity)
     if task is not None:
         over = deep_merge(over, {"task": {"mode": task}})
-    env_obj = ev.make_eval_env(
-        agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=over or None
-    )
-    policy = ev.make_agent(agent, env_obj, model, seed)
-    env_id = env_obj.spec.id if env_obj.spec is not None else env
-    cfg = env_obj.unwrapped.cfg
-    try:
-        summary = ev.evaluate(
-            policy, env_obj, episodes, seed, gif_path=gif_path, progress=None if json_out else _show
+    with as_flags(env_id="--env"):
+        env_obj = ep.make_eval_env(
+            agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=over or None
         )
+    with as_flags(model_path="--model", agent="--agent"):
+        policy = ev.make_agent(agent, env_obj, model, seed)
+    env_id = env_obj.spec.id if env_obj.spec is not None else env
+    cfg = ep.nav_env(env_obj).cfg
+    try:
+        with as_flags(n_episodes="--episodes"):
+            summary = ep.run_episodes(
+                policy,
+                env_obj,
+                episodes,
+                seed,
+                gif_path=gif_path,
+                progress=None if json_out else _show,
+            )
     finally:
         env_obj.close()
     doc = {
@@ -138,7 +149,7 @@ def evaluate(
         "fidelity": cfg.radar.fidelity,
         "sets": list(sets or []),
         "model": str(model or ev.DEFAULT_MODEL) if agent == "ppo" else None,
-        **ev.public(summary),
+        **ep.public(summary),
     }
     if out_path is not None:
         write_json(doc, out_path)

@@ -10,6 +10,7 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from lrp_gym.commands._common import (
+    as_flags,
     atomic_path,
     check_distinct,
     check_output,
@@ -128,14 +129,15 @@ def _search(cfg, method: str, candidates: int | None, seed: int, quiet: bool):
         disable=quiet,
     ) as bar:
         task = bar.add_task("search", total=n)
-        result = search_layout(
-            problem,
-            method,
-            n,
-            seed,
-            cfg.placement.refine_top,
-            progress=lambda done, total: bar.update(task, completed=done),
-        )
+        with as_flags(candidates="--candidates", method="--method"):
+            result = search_layout(
+                problem,
+                method,
+                n,
+                seed,
+                cfg.placement.refine_top,
+                progress=lambda done, total: bar.update(task, completed=done),
+            )
     new_cfg = with_layout(cfg, result.positions_m)
     analysis = analyse_scenario(new_cfg)
     pos, idx, names = layout_arrays(new_cfg)

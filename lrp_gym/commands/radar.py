@@ -73,8 +73,11 @@ def radar(
     if plot_path is not None:
         from lrp_gym.radar.plotting import plot_range_doppler
 
+        map_db = sensor.last_map_db
+        if map_db is None:  # the signal fidelity keeps its map
+            raise InputError("--plot: the range-Doppler map needs --fidelity signal")
         fig = plot_range_doppler(
-            sensor.last_map_db,
+            map_db,
             sensor.processor.range_axis_m,
             sensor.processor.velocity_axis_mps,
             det,

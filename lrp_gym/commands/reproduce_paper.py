@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 import typer
 
@@ -63,7 +65,7 @@ def plot_errors(result: Reproduction, title: str = ""):
             ms=5,
             label=f"{label}: median, bars min–max ({runs} runs)",
         )
-    fail = PAPER["lut_failures_m"]
+    fail = cast(dict[int, float], PAPER["lut_failures_m"])
     ax.plot(
         list(fail),
         list(fail.values()),
@@ -74,14 +76,14 @@ def plot_errors(result: Reproduction, title: str = ""):
         label="paper: look-up table failures",
     )
     ax.axhline(
-        PAPER["amcl_mean_error_m"],
+        cast(float, PAPER["amcl_mean_error_m"]),
         color="tab:blue",
         ls="--",
         lw=1,
         label=f"paper: AMCL mean error {PAPER['amcl_mean_error_m']} m",
     )
     ax.axvline(
-        PAPER["amcl_converged_after"],
+        cast(float, PAPER["amcl_converged_after"]),
         color="grey",
         ls=":",
         lw=1,
@@ -159,10 +161,10 @@ def reproduce_paper(
     if random_rooms:
         if true_fingerprints or plot_path:
             raise InputError("--random-rooms: runs both fingerprint kinds and draws no --plot")
-        over = deep_merge(parse_sets(sets, scenario), {"radar": {"noise": noise}})
+        rooms_over = deep_merge(parse_sets(sets, scenario), {"radar": {"noise": noise}})
         if particles is not None:
-            over = deep_merge(over, _particles(particles, 200))
-        _random_rooms(random_rooms, runs, seed, over, estimator, out_path, json_out)
+            rooms_over = deep_merge(rooms_over, _particles(particles, 200))
+        _random_rooms(random_rooms, runs, seed, rooms_over, estimator, out_path, json_out)
         return
     cfg = load_config(scenario, sets, fidelity)
     over: dict = {"radar": {"noise": noise}}
@@ -209,7 +211,7 @@ def reproduce_paper(
 
 def _print(name: str, data: dict, noise: bool) -> None:
     grid = data.get("grid")
-    cols = ("pos", "LUT mean [m]", "AMCL mean [m]", "AMCL std [m]", "particles")
+    cols: tuple[str, ...] = ("pos", "LUT mean [m]", "AMCL mean [m]", "AMCL std [m]", "particles")
     if grid:
         cols += ("grid mean [m]", "grid std [m]")
     t = table(

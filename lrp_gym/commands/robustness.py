@@ -9,6 +9,7 @@ from rich import box
 
 from lrp_gym.commands._common import (
     FIDELITIES,
+    as_flags,
     check_distinct,
     check_output,
     choice,
@@ -86,27 +87,31 @@ def robustness(
     for n in names:
         choice(n, rb.PERTURBATION_NAMES, "--perturbations")
     check_agent(agent, model, task, episodes)
-    rb._check(names, sev, episodes, agent)
+    with as_flags(
+        perturbations="--perturbations", severities="--severities", episodes="--episodes"
+    ):
+        rb._check(names, sev, episodes)
     choice(fidelity, FIDELITIES, "--fidelity")
     if seed < 0:
         raise InputError(f"--seed: must be non-negative, got {seed}")
     out_path = check_output(out, "--out", force, (".json",))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
     check_distinct(out_path, plot_path)
-    result = _run(
-        rb,
-        agent,
-        env,
-        names,
-        sev,
-        episodes,
-        seed,
-        task,
-        model,
-        scenario,
-        json_out,
-        overrides(scenario, sets, fidelity),
-    )
+    with as_flags(env_id="--env", model_path="--model", agent="--agent", task="--task"):
+        result = _run(
+            rb,
+            agent,
+            env,
+            names,
+            sev,
+            episodes,
+            seed,
+            task,
+            model,
+            scenario,
+            json_out,
+            overrides(scenario, sets, fidelity),
+        )
     if plot_path is not None:
         save_figure(rb.plot_matrix(result), plot_path)
     if out_path is not None:
@@ -124,6 +129,8 @@ def _run(rb, agent, env, names, sev, episodes, seed, task, model, scenario, quie
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from agents.evaluate import make_agent
+
     total = episodes * (1 + len(names) * len(sev))
     with Progress(
         TextColumn("{task.description}"),
@@ -135,6 +142,7 @@ def _run(rb, agent, env, names, sev, episodes, seed, task, model, scenario, quie
     ) as bar:
         job = bar.add_task("robustness", total=total)
         result = rb.run_matrix(
+            lambda e: make_agent(agent, e, model, seed),
             agent,
             env,
             names,
@@ -142,7 +150,6 @@ def _run(rb, agent, env, names, sev, episodes, seed, task, model, scenario, quie
             episodes,
             seed,
             task,
-            model=model,
             overrides=over,
             progress=lambda label: bar.update(job, description=f"{label:<26}"),
             on_episode=lambda: bar.advance(job),
@@ -160,8 +167,8 @@ def _print(result: dict, budget: int) -> None:
 
     e, s = result["episodes"], result["seed"]
     # Two-line headers and no vertical rules: the nine columns fit 80 columns unfolded.
-    cols = ("perturbation", "sev.", "success", "coll.", "p50\n[m]", "p95\n[m]", "localised")
-    cols += ("recov.\n[frames]", f"recov.\n<= {budget}")
+    cols: tuple[str, ...] = ("perturbation", "sev.", "success", "coll.", "p50\n[m]", "p95\n[m]")
+    cols += ("localised", "recov.\n[frames]", f"recov.\n<= {budget}")
     t = table(
         f"{result['agent']} on {result['env_id']} ({result['scenario']}, "
         f"{result['task'] or 'its task'}), {e} episodes/cell, seeds {s}..{s + e - 1}",

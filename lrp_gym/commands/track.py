@@ -62,7 +62,7 @@ def track(
     with a track swap and the frames where some reflector had no fresh tracked distance. AMCL
     runs alongside on the gated detections, as in the env; its estimate is the prior.
     """
-    from lrp_gym.tracking.evaluate import run_path
+    from lrp_gym.experiments.track_path import run_path
 
     choice(fidelity, FIDELITIES, "--fidelity")
     out_path = check_output(out, "--out", force, (".json",))

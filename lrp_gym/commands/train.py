@@ -7,7 +7,7 @@ from pathlib import Path
 import typer
 from rich.console import Console
 
-from lrp_gym.commands._common import console, print_json
+from lrp_gym.commands._common import as_flags, console, print_json
 from lrp_gym.errors import InputError
 
 
@@ -73,17 +73,19 @@ def train(
     if export_episodes < 1:
         raise InputError(f"--export-episodes: must be at least 1, got {export_episodes}")
     say = Console(stderr=True, highlight=False) if json_out else console
-    info = run(
-        config,
-        env,
-        timesteps,
-        out,
-        resume,
-        seed,
-        progress_bar=progress and not json_out,
-        force=force,
-        log=lambda msg: _line(say, msg),
-    )
+    flags = dict(config="--config", env_id="--env", out="--out", resume="--resume")
+    with as_flags(**flags, force="--force", timesteps="--timesteps"):
+        info = run(
+            config,
+            env,
+            timesteps,
+            out,
+            resume,
+            seed,
+            progress_bar=progress and not json_out,
+            force=force,
+            log=lambda msg: _line(say, msg),
+        )
     for path in info["files"]:
         _line(say, f"wrote {path}")
     _report(say, info)
@@ -101,7 +103,8 @@ def _export(say: Console, run_dir: str, export: Path, episodes: int) -> dict:
     """Ship the run's best model to ``export`` and evaluate it there."""
     from agents.ppo import export_model
 
-    doc = export_model(run_dir, export, episodes=episodes)
+    with as_flags(model_path="--export", run_dir="--export"):
+        doc = export_model(run_dir, export, episodes=episodes)
     for name in (doc["model"], doc["statistics"], "ppo_lrp_nav.json"):
         _line(say, f"wrote {Path(export) / name}")
     fe = doc["final_eval"]

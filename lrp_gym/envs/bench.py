@@ -50,7 +50,9 @@ def bench_envs(cfg: ScenarioConfig, seconds: float) -> dict:
         info = env.step(_CIRCLE_ACTION)[4]
         env.close()
         rand_env = gym.make(env_id, scenario=cfg)
-        with_resets = benchmark_step(rand_env, target_duration=max(seconds, 1.0), seed=0)
+        # gymnasium annotates target_duration as int; a float works.
+        duration = max(seconds, 1.0)
+        with_resets = benchmark_step(rand_env, target_duration=duration, seed=0)  # type: ignore[arg-type]
         rand_env.close()
         out[env_id] = {
             "steps_per_s": converged,

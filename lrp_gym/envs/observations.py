@@ -82,53 +82,11 @@ class ObservationType:
         raise NotImplementedError
 
 
-@register_observation("estimated")
-class EstimatedPoseObservation(ObservationType):
-    """Flat float32 vector built from the pose *estimate*.
-
-    Layout (``n = n_waypoints``):
-
-    ==========  =====  =================================================================
-    index       count  content
-    ==========  =====  =================================================================
-    0-1         2      estimated x / Lx, y / Ly (0..1 inside the room)
-    2-3         2      cos, sin of the estimated heading
-    4-6         3      standard deviations of x, y (m) and heading (rad), capped at 5
-    7           1      1.0 when localisation has converged, else 0.0
-    8..8+2n     2n     next n waypoints (dx, dy) in the estimated robot frame, metres
-    8+2n..+2    2      goal (dx, dy) in the estimated robot frame, metres
-    last 2      2      previous action
-    ==========  =====  =================================================================
-    """
+class PoseObservation(ObservationType):
+    """Shared content of the pose-based types: the pose (estimate or truth), its spread, the
+    waypoints and goal in the robot frame, and the last action."""
 
     use_truth = False
-
-    def labels(self) -> list[str]:
-        n = self.cfg.n_waypoints
-        wp = [f"wp{i}_{c}" for i in range(1, n + 1) for c in ("dx", "dy")]
-        return [
-            "x_norm",
-            "y_norm",
-            "cos_theta",
-            "sin_theta",
-            "std_x",
-            "std_y",
-            "std_theta",
-            "converged",
-            *wp,
-            "goal_dx",
-            "goal_dy",
-            "last_speed",
-            "last_turn",
-        ]
-
-    @property
-    def space(self) -> spaces.Box:
-        n = self.cfg.n_waypoints
-        r = self.reach_m
-        low = np.array([-0.5, -0.5, -1, -1, 0, 0, 0, 0] + [-r] * (2 * n + 2) + [-1, -1], np.float32)
-        high = np.array([1.5, 1.5, 1, 1, 5, 5, 5, 1] + [r] * (2 * n + 2) + [1, 1], np.float32)
-        return spaces.Box(low, high, dtype=np.float32)
 
     def _parts(self, snap: NavSnapshot):
         if self.use_truth:
@@ -148,6 +106,63 @@ class EstimatedPoseObservation(ObservationType):
             snap.last_action,
         )
 
+
+@register_observation("estimated")
+class EstimatedPoseObservation(PoseObservation):
+    """Flat float32 vector built from the pose *estimate*.
+
+    Layout (``n = n_waypoints``):
+
+    ==========  =====  =================================================================
+    index       count  content
+    ==========  =====  =================================================================
+    0-1         2      estimated x / Lx, y / Ly (0..1 inside the room)
+    2-3         2      cos, sin of the estimated heading
+    4-6         3      standard deviations of x, y (m) and heading (rad), capped at 5
+    7           1      1.0 when localisation has converged, else 0.0
+    8..8+2n     2n     next n waypoints (dx, dy) in the estimated robot frame, metres
+    8+2n..+2    2      goal (dx, dy) in the estimated robot frame, metres
+    last 2      2      previous action
+    ==========  =====  =================================================================
+    """
+
+    #: Length of the layout without the waypoints (8 pose/std/converged + 2 goal + 2 action).
+    FIXED_LEN = 12
+
+    @staticmethod
+    def fields(n_waypoints: int) -> dict[str, slice]:
+        """Where each named part sits in the flat vector, for ``n_waypoints`` waypoints.
+
+        Keys: ``position``, ``heading``, ``std``, ``converged``, ``waypoints``, ``goal``,
+        ``last_action`` (the table above); consumers read these instead of hard-coding indices.
+        """
+        n2 = 2 * n_waypoints
+        return {
+            "position": slice(0, 2),
+            "heading": slice(2, 4),
+            "std": slice(4, 7),
+            "converged": slice(7, 8),
+            "waypoints": slice(8, 8 + n2),
+            "goal": slice(8 + n2, 10 + n2),
+            "last_action": slice(10 + n2, 12 + n2),
+        }
+
+    @classmethod
+    def n_waypoints_of(cls, length: int) -> int:
+        """Waypoint count of a flat observation of ``length`` values (ValueError if none fits)."""
+        n, rest = divmod(length - cls.FIXED_LEN, 2)
+        if n < 1 or rest:
+            raise ValueError(f"observation: length {length} is not 12 + 2 n_waypoints")
+        return n
+
+    @property
+    def space(self) -> spaces.Box:
+        n = self.cfg.n_waypoints
+        r = self.reach_m
+        low = np.array([-0.5, -0.5, -1, -1, 0, 0, 0, 0] + [-r] * (2 * n + 2) + [-1, -1], np.float32)
+        high = np.array([1.5, 1.5, 1, 1, 5, 5, 5, 1] + [r] * (2 * n + 2) + [1, 1], np.float32)
+        return spaces.Box(low, high, dtype=np.float32)
+
     def observe(self, snap: NavSnapshot) -> np.ndarray:
         xy, cs, std, conv, wps, goal, act = self._parts(snap)
         return np.concatenate([xy, cs, std, [conv], wps.ravel(), goal, act]).astype(np.float32)
@@ -161,7 +176,7 @@ class OraclePoseObservation(EstimatedPoseObservation):
 
 
 @register_observation("dict")
-class DictObservation(EstimatedPoseObservation):
+class DictObservation(PoseObservation):
     """The ``estimated`` content as a Dict space with named parts."""
 
     @property

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -23,6 +23,9 @@ class WaypointPath:
 
     waypoints_m: np.ndarray
     arc_m: np.ndarray
+    _seg_start: np.ndarray = field(init=False, repr=False, compare=False)
+    _seg_dir: np.ndarray = field(init=False, repr=False, compare=False)
+    _seg_len: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         # Segment geometry, cached: project() runs twice per env step.
@@ -75,8 +78,8 @@ class WaypointPath:
 
     def upcoming(self, s_m: float, n: int) -> np.ndarray:
         """The next ``n`` waypoints beyond arc length ``s_m`` (the goal repeated at the end)."""
-        idx = int(np.searchsorted(self.arc_m, s_m + 1e-6, side="right"))
-        idx = np.minimum(np.arange(idx, idx + n), len(self.arc_m) - 1)
+        first = int(np.searchsorted(self.arc_m, s_m + 1e-6, side="right"))
+        idx = np.minimum(np.arange(first, first + n), len(self.arc_m) - 1)
         return self.waypoints_m[idx]
 
 

@@ -1,7 +1,7 @@
 """Robustness matrix: perturbation x severity, closed-loop episodes on fixed seeds per cell.
 
 Every cell runs ``episodes`` episodes on seeds ``seed .. seed + episodes - 1`` with the
-evaluator of :mod:`agents.evaluate` (same agent, same env id, same scenario; only the
+runner of :mod:`lrp_gym.experiments.episodes` (same policy, same env id, same scenario; only the
 ``perturbations`` override differs), plus one baseline row without perturbation. Per cell:
 success rate, collision rate, localisation error percentiles (p50, p95, pooled over all steps),
 the share of steps localised (error < :data:`LOCALISED_M`) and, for ``kidnapping``, the frames
@@ -17,10 +17,12 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from lrp_gym.config import PerturbationsConfig, deep_merge
-from lrp_gym.errors import InputError
+from lrp_gym.experiments.episodes import Policy, make_eval_env, nav_env, run_episode, summarize
+from lrp_gym.perturbations.motion import Kidnapping
 
 LOCALISED_M = 0.2
 RECOVERY_BUDGET_FRAMES = 15
@@ -28,7 +30,6 @@ DEFAULT_ENV = "LRPRadarNavFast-v0"
 DEFAULT_SEVERITIES = (0.25, 0.5, 1.0)
 PERTURBATION_NAMES = tuple(PerturbationsConfig.model_fields)
 BASELINE = "none"
-AGENTS = ("pure-pursuit", "ppo", "oracle", "random")
 
 
 def recovery_frames(loc_error_m: np.ndarray, kidnap_frame: int, threshold_m: float = LOCALISED_M):
@@ -48,27 +49,25 @@ def cell_overrides(name: str, severity: float) -> dict[str, Any]:
     return {} if name == BASELINE else {"perturbations": {name: {"severity": float(severity)}}}
 
 
-def _check(perturbations: Sequence[str], severities: Sequence[float], episodes: int, agent: str):
+def _check(perturbations: Sequence[str], severities: Sequence[float], episodes: int) -> None:
     unknown = [p for p in perturbations if p not in PERTURBATION_NAMES]
     if unknown:
-        raise InputError(
-            f"--perturbations: unknown {', '.join(map(repr, unknown))}; "
+        raise ValueError(
+            f"perturbations: unknown {', '.join(map(repr, unknown))}; "
             f"choose from {', '.join(PERTURBATION_NAMES)}"
         )
     if not perturbations:
-        raise InputError("--perturbations: give at least one")
+        raise ValueError("perturbations: give at least one")
     bad = [s for s in severities if not (np.isfinite(s) and 0.0 <= s <= 1.0)]
     if bad or not severities:
-        raise InputError(f"--severities: each must be in [0, 1], got {list(severities)}")
+        raise ValueError(f"severities: each must be in [0, 1], got {list(severities)}")
     if episodes < 1:
-        raise InputError(f"--episodes: must be at least 1, got {episodes}")
-    if agent not in AGENTS:
-        raise InputError(f"--agent: unknown agent {agent!r}; choose one of {', '.join(AGENTS)}")
+        raise ValueError(f"episodes: must be at least 1, got {episodes}")
 
 
 def run_cell(
-    env: Any,
-    policy: Any,
+    env: gym.Env,
+    policy: Policy,
     name: str,
     severity: float,
     episodes: int,
@@ -76,15 +75,13 @@ def run_cell(
     on_episode: Callable[[], None] | None = None,
 ) -> dict[str, Any]:
     """Run one cell's episodes in ``env`` (already built with the cell's overrides)."""
-    from agents.evaluate import run_episode, summarize
-
     results, recov, kidnapped = [], [], 0
     for i in range(episodes):
         res = run_episode(env, policy, seed + i)
         results.append(res)
-        pert = env.unwrapped.perturbations
+        pert = nav_env(env).perturbations
         kid = pert.get("kidnapping") if pert is not None else None
-        if kid is not None and kid.kidnap_frame is not None:
+        if isinstance(kid, Kidnapping) and kid.kidnap_frame is not None:
             kidnapped += 1
             recov.append(recovery_frames(res.loc_error_m, kid.kidnap_frame))
         if on_episode is not None:
@@ -113,14 +110,14 @@ def run_cell(
 
 
 def run_matrix(
+    make_policy: Callable[[gym.Env], Policy],
     agent: str = "pure-pursuit",
     env_id: str = DEFAULT_ENV,
     perturbations: Sequence[str] = PERTURBATION_NAMES,
     severities: Sequence[float] = DEFAULT_SEVERITIES,
     episodes: int = 10,
     seed: int = 0,
-    task: str = "path",
-    model: str | None = None,
+    task: str | None = "path",
     overrides: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
     on_episode: Callable[[], None] | None = None,
@@ -130,8 +127,12 @@ def run_matrix(
 
     Parameters
     ----------
-    agent : {"pure-pursuit", "ppo", "oracle", "random"}
-        ``oracle`` drives on the true pose, so kidnapping measures AMCL alone.
+    make_policy : callable
+        Builds the policy from the first cell's env (called once; the policy then drives
+        every cell).
+    agent : str
+        The policy's name in the result; ``oracle`` gets the true-pose observation, so
+        kidnapping measures AMCL alone.
     env_id : str
         ``LRPRadarNavFast-v0`` (default) or ``LRPRadarNav-v0`` (signal-level radar).
     task : {"path", "goal"}
@@ -150,11 +151,9 @@ def run_matrix(
     dict
         ``{"agent", "env_id", "task", "episodes", "seed", "cells": [...]}``.
     """
-    from agents.evaluate import make_agent, make_eval_env
-
-    _check(perturbations, severities, episodes, agent)
+    _check(perturbations, severities, episodes)
     if task not in ("path", "goal", None) or (task is None and scenario is None):
-        raise InputError(f"--task: must be 'path' or 'goal', got {task!r}")
+        raise ValueError(f"task: must be 'path' or 'goal', got {task!r}")
     if scenario is None:
         scenario = "ipin2023" if task == "path" else None
     elif task is not None:
@@ -169,7 +168,7 @@ def run_matrix(
         env = make_eval_env(agent, env_id, scenario, overrides=cell or None)
         try:
             if policy is None:
-                policy = make_agent(agent, env, model, seed)
+                policy = make_policy(env)
             cells.append(run_cell(env, policy, name, sev, episodes, seed, on_episode))
         finally:
             env.close()

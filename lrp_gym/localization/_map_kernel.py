@@ -12,6 +12,9 @@ what makes a few dozen predicted returns per particle affordable.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 
 #: Exponent below which a term is skipped (5 standard deviations: exp(-12.5) = 3.7e-6).
@@ -39,6 +42,7 @@ def _density_loops(z, half_inv, extra, w, v, extra_v, dopp_a, dopp_b, dopp_c, ou
     return out
 
 
+_density_jit: Callable[..., Any] | None
 try:
     from numba import njit
 
@@ -79,7 +83,7 @@ def map_return_density(
     if use_numba and _density_jit is not None:
         out = np.zeros((len(z), extra.shape[1]), dtype=dtype)
         vv = np.asarray(v, dtype=dtype) if with_v else np.zeros(0, dtype=dtype)
-        ev = extra_v.astype(dtype, copy=False) if with_v else np.zeros((1, 1), dtype=dtype)
+        ev = np.asarray(extra_v, dtype=dtype) if with_v else np.zeros((1, 1), dtype=dtype)
         a, b, c = (dtype(x) for x in doppler)
         return _density_jit(
             np.asarray(z, dtype=dtype),
@@ -99,7 +103,7 @@ def map_return_density(
     np.exp(rs, out=rs)
     if with_v:
         a, b, c = (dtype(x) for x in doppler)
-        dv = extra_v[None, :, :] - np.asarray(v, dtype=dtype)[:, None, None]
+        dv = np.asarray(extra_v)[None, :, :] - np.asarray(v, dtype=dtype)[:, None, None]
         dv *= dv
         dv *= c
         np.exp(dv, out=dv)

@@ -16,7 +16,7 @@ from lrp_gym.world.world import World
 def _time_updates(amcl: Amcl, steps, seconds: float, rng, fixed_n: int | None) -> float:
     """Mean milliseconds per update; the particle set is restored to ``fixed_n`` before each."""
     state = (amcl.particles.copy(), amcl.weights.copy())
-    times = []
+    times: list[float] = []
     deadline = time.perf_counter() + seconds
     i = 0
     while time.perf_counter() < deadline or len(times) < 5:
@@ -31,7 +31,8 @@ def _time_updates(amcl: Amcl, steps, seconds: float, rng, fixed_n: int | None) -
 
 
 def bench_amcl(cfg: ScenarioConfig, seconds: float) -> dict:
-    """Time AMCL updates on true fingerprints along a straight 0.5 m-step drive.
+    """Time AMCL updates on true fingerprints around a loop: 12 poses on a 0.8 m circle about
+    the room centre, heading along the circle (0.41 m and 30 degrees between poses).
 
     Returns
     -------

@@ -142,9 +142,10 @@ class GridFilter:
         py = _cell_probabilities(self.y_m - mean[1], self.cell_m, std[1])
         # Wrapped normal in heading: the mass of the neighbouring turns too.
         rel = wrap_fast(self.headings_rad - mean[2])
-        pth = sum(
+        below, centre, above = (
             _cell_probabilities(rel + w * 2.0 * np.pi, self.cell_rad, std[2]) for w in (-1, 0, 1)
         )
+        pth = below + centre + above
         d = pth[:, None, None] * (px[:, None] * py[None, :] * self.free)[None]
         total = float(d.sum())
         if not total > 0.0:  # the Gaussian misses the free space: AMCL would restart too

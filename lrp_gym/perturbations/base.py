@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-from pydantic import BaseModel
 
+from lrp_gym.config.perturbations import PerturbationConfig
 from lrp_gym.radar.detections import Detections
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.world import World
@@ -75,7 +75,7 @@ class Perturbation:
 
     name: ClassVar[str] = ""
 
-    def __init__(self, cfg: BaseModel, world: World) -> None:
+    def __init__(self, cfg: PerturbationConfig, world: World) -> None:
         self.cfg = cfg
         self.world = world
         self.severity = float(cfg.severity)

@@ -40,10 +40,6 @@ class PerturbationSet:
     def get(self, name: str) -> Perturbation | None:
         return next((p for p in self.items if p.name == name), None)
 
-    @property
-    def names(self) -> tuple[str, ...]:
-        return tuple(p.name for p in self.items)
-
     # ------------------------------------------------------------------ hooks
     def reset(self, ctx: FrameContext, rng: np.random.Generator) -> ReflectorLayout:
         """Draw the episode's state; return the layout the radar sees this episode."""

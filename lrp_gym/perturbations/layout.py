@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from lrp_gym.config.perturbations import DisplacedReflectorConfig, IncidenceAngleConfig
 from lrp_gym.perturbations.base import Perturbation, register
 from lrp_gym.world.reflectors import ReflectorLayout
 
@@ -25,6 +26,7 @@ class DisplacedReflector(Perturbation):
     """
 
     name = "displaced_reflector"
+    cfg: DisplacedReflectorConfig
 
     def __init__(self, cfg, world) -> None:
         super().__init__(cfg, world)
@@ -56,6 +58,7 @@ class IncidenceAngle(Perturbation):
     """
 
     name = "incidence_angle"
+    cfg: IncidenceAngleConfig
 
     def sensor_layout(self, layout: ReflectorLayout, rng: np.random.Generator) -> ReflectorLayout:
         s = self.severity

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lrp_gym.config.perturbations import KidnappingConfig, OdometrySlipConfig
 from lrp_gym.perturbations.base import Perturbation, register
 
 
@@ -19,6 +20,7 @@ class OdometrySlip(Perturbation):
     """
 
     name = "odometry_slip"
+    cfg: OdometrySlipConfig
 
     def __init__(self, cfg, world) -> None:
         super().__init__(cfg, world)
@@ -47,6 +49,7 @@ class Kidnapping(Perturbation):
     """
 
     name = "kidnapping"
+    cfg: KidnappingConfig
 
     def __init__(self, cfg, world) -> None:
         super().__init__(cfg, world)

@@ -4,6 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from lrp_gym.config.perturbations import (
+    ClutterConfig,
+    InterferenceConfig,
+    MissedDetectionsConfig,
+    ShadowingConfig,
+)
 from lrp_gym.perturbations.base import (
     FrameContext,
     Perturbation,
@@ -35,6 +41,7 @@ class Shadowing(Perturbation):
     """
 
     name = "shadowing"
+    cfg: ShadowingConfig
 
     def __init__(self, cfg, world) -> None:
         super().__init__(cfg, world)
@@ -106,6 +113,7 @@ class MissedDetections(Perturbation):
     """
 
     name = "missed_detections"
+    cfg: MissedDetectionsConfig
 
     def __init__(self, cfg, world) -> None:
         super().__init__(cfg, world)
@@ -130,6 +138,7 @@ class Clutter(Perturbation):
     """
 
     name = "clutter"
+    cfg: ClutterConfig
 
     def __init__(self, cfg, world) -> None:
         super().__init__(cfg, world)
@@ -167,6 +176,7 @@ class Interference(Perturbation):
     """
 
     name = "interference"
+    cfg: InterferenceConfig
 
     def __init__(self, cfg, world) -> None:
         super().__init__(cfg, world)

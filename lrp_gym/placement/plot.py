@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from lrp_gym.placement.ambiguity import AmbiguityResult
+from lrp_gym.placement.scenario import layout_arrays
 
 _MARKERS = ("o", "s", "^", "D", "v", "P")
 
@@ -73,7 +74,7 @@ def plot_ambiguity_map(
     for lo, hi in obstacles or []:
         ax.add_patch(
             Rectangle(
-                lo[:2],
+                (float(lo[0]), float(lo[1])),
                 hi[0] - lo[0],
                 hi[1] - lo[1],
                 facecolor="0.55",
@@ -178,8 +179,6 @@ def _area_legend(result: AmbiguityResult, cmap, excluded: bool, path: bool):
 
 def plot_scenario_map(cfg, result: AmbiguityResult, title: str = ""):
     """:func:`plot_ambiguity_map` for a scenario (room, obstacles, layout and task path)."""
-    from lrp_gym.placement.scenario import layout_arrays
-
     pos, idx, names = layout_arrays(cfg)
     return plot_ambiguity_map(
         result,

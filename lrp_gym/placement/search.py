@@ -214,7 +214,7 @@ def random_search(
 ) -> SearchResult:
     """Best of ``candidates`` random feasible layouts (the paper's method)."""
     if candidates < 1:
-        raise InputError("--candidates: must be at least 1")
+        raise ValueError(f"candidates: must be at least 1, got {candidates}")
     start = time.perf_counter()
     layouts = problem.sample(rng, candidates)
     scores = np.empty(candidates)
@@ -251,7 +251,7 @@ def optimise_search(
     once the budget is spent; the best ``refine_top`` evaluated layouts are then refined.
     """
     if candidates < 1:
-        raise InputError("--candidates: must be at least 1")
+        raise ValueError(f"candidates: must be at least 1, got {candidates}")
     start = time.perf_counter()
     m = problem.n_reflectors
     pop = max(8, round(2.5 * m))
@@ -314,4 +314,4 @@ def search_layout(
         return random_search(problem, candidates, rng, refine_top, progress)
     if method == "optimize":
         return optimise_search(problem, candidates, rng, refine_top, progress)
-    raise InputError(f"--method: unknown {method!r}; choose random or optimize")
+    raise ValueError(f"method: unknown {method!r}; choose random or optimize")

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 
 
@@ -32,6 +35,7 @@ def _greedy_owner_loops(rb, db, res_r, res_d, nc):
     return owner
 
 
+_greedy_owner_jit: Callable[..., Any] | None
 try:
     from numba import njit
 

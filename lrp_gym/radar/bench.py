@@ -7,6 +7,7 @@ import time
 import numpy as np
 
 from lrp_gym.config import ScenarioConfig
+from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world.world import World
 
 
@@ -51,8 +52,6 @@ def bench_radar(cfg: ScenarioConfig, seconds: float) -> dict:
     Uses the scenario with noise on and its configured reflection order, on random free poses
     moving at up to the robot's top speed.
     """
-    from lrp_gym.radar.sensor import RadarSensor
-
     blas_limited = limit_blas_threads(1)
     world = World.from_config(cfg)
     rng = np.random.default_rng(1)

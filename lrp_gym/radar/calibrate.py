@@ -13,6 +13,7 @@ import numpy as np
 
 from lrp_gym.config import ScenarioConfig, load_scenario
 from lrp_gym.radar.channel import Paths
+from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world.world import World
 
 
@@ -40,14 +41,15 @@ def sweep(
     seed: int = 0,
 ) -> dict:
     """Run the sweep; returns per-SNR error std (bins), detection rates and the fitted K."""
-    from lrp_gym.radar.sensor import RadarSensor
-
     cfg = cfg or load_scenario("ipin2023")
     world = World.from_config(cfg)  # only its waveform is used: the paths are synthetic
     sig = RadarSensor(world, cfg.radar.model_copy(update={"fidelity": "signal", "noise": True}))
     fast = RadarSensor(
         world, cfg.radar.model_copy(update={"fidelity": "detections", "noise": True})
     )
+    fast_model = fast._fast
+    if fast_model is None:  # the detections fidelity always builds it
+        raise RuntimeError("the detections-fidelity sensor has no fast model")
     fm = sig.fmcw
     rng = np.random.default_rng(seed)
     rows = []
@@ -62,7 +64,7 @@ def sweep(
                 hit_s += 1
                 er.append((det.range_m[j] - r) / fm.range_resolution_m)
                 ed.append((det.velocity_mps[j] - v) / fm.velocity_resolution_mps)
-            dfast = fast._fast.detect(p, rng)
+            dfast = fast_model.detect(p, rng)
             hit_f += bool(np.any(np.abs(dfast.range_m - r) < 2 * fm.range_resolution_m))
         snr = 10.0 ** (snr_db / 10.0)
         rows.append(

@@ -28,10 +28,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import brentq
 from scipy.special import betainc, gammainc, gammaln
+
+if TYPE_CHECKING:
+    from lrp_gym.config import CfarConfig
 
 METHODS = ("CA", "SO", "GO", "OS")
 
@@ -87,13 +91,27 @@ class Cfar2D:
         Design false-alarm probability per cell.
     os_rank : float
         OS only: rank as a fraction of the number of training cells.
+
+    No defaults here: :meth:`from_config` builds it from the validated ``radar.cfar``
+    (:class:`lrp_gym.config.CfarConfig` holds the defaults).
     """
 
-    method: str = "CA"
-    guard: tuple[int, int] = (2, 1)
-    training: tuple[int, int] = (8, 3)
-    pfa: float = 1e-6
-    os_rank: float = 0.75
+    method: str
+    guard: tuple[int, int]
+    training: tuple[int, int]
+    pfa: float
+    os_rank: float
+
+    @classmethod
+    def from_config(cls, cfg: CfarConfig) -> Cfar2D:
+        """The detector a scenario's ``radar.cfar`` section describes."""
+        return cls(
+            cfg.method,
+            (cfg.guard_cells[0], cfg.guard_cells[1]),
+            (cfg.training_cells[0], cfg.training_cells[1]),
+            cfg.pfa,
+            cfg.os_rank,
+        )
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:

@@ -208,6 +208,11 @@ class Channel:
         antenna: ZenithPattern | None = None,
         min_power_w: float = 0.0,
     ) -> None:
+        if room.surfaces is None:
+            raise ValueError(
+                "room.surfaces: the channel needs the surfaces' reflection coefficients"
+            )
+        self.surfaces = room.surfaces
         self.room = room
         self.body_shadowing = bool(body_shadowing)
         self.antenna = antenna
@@ -219,7 +224,7 @@ class Channel:
         idx = np.vstack([np.zeros((1, 3), int), lattice_indices(self.max_order)])
         self.indices = idx  # row 0 is the radar itself
         self.image_order = np.abs(idx).sum(axis=1)
-        self.image_gamma = lattice_gamma(idx, room.surfaces.face_coefficients())
+        self.image_gamma = lattice_gamma(idx, self.surfaces.face_coefficients())
         self.mirror = np.where(idx % 2 != 0, -1.0, 1.0)  # velocity mirroring per axis
         self.mirror[:, 2] = 0.0  # the radar moves in the floor plane
         # Reflector path pairs (a <= b): the reciprocal pair is folded in with amplitude 2.
@@ -399,7 +404,7 @@ class Channel:
         if self.body_shadowing:
             ok &= foot[:, 2] >= r[2] - 1e-9  # a face seen from above lies below the deck
         dist, rate, dz = dist[ok], (f["sign"] * v[ax])[ok], foot[ok, 2] - r[2]
-        g = self.room.surfaces.obstacles
+        g = self.surfaces.obstacles
         power = self.link_w_m2 * g**2 / (FOUR_PI * 2.0 * dist) ** 2
         if self.antenna is not None:
             power = power * self.antenna.gain(dz / dist) ** 2

@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from lrp_gym.config import ScenarioConfig
+from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world.world import World
 
 
@@ -87,8 +88,6 @@ def lrp_detection_rate(
     fidelity : {"signal", "detections"}, optional
         Overrides ``cfg.radar.fidelity``.
     """
-    from lrp_gym.radar.sensor import RadarSensor
-
     world = World.from_config(cfg)
     radar_cfg = (
         cfg.radar if fidelity is None else cfg.radar.model_copy(update={"fidelity": fidelity})

@@ -26,6 +26,7 @@ cube or the map:
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -33,6 +34,10 @@ from lrp_gym.radar._merge import greedy_owner
 from lrp_gym.radar.channel import Paths
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.processing import window, window_dtft
+
+if TYPE_CHECKING:
+    # The sensor builds this model for itself (detections fidelity), so it imports this module.
+    from lrp_gym.radar.sensor import RadarSensor
 
 #: interpolation error std in bins times sqrt(2 SNR); from ``python -m lrp_gym.radar.calibrate``
 RANGE_ERROR_K = 1.02
@@ -50,9 +55,8 @@ def sidelobe_envelope(name: str, n: int, max_bins: float, step: float = 0.05) ->
 class FastDetectionModel:
     """Detections straight from paths; build with :meth:`for_sensor`."""
 
-    def __init__(self, sensor, use_numba: bool = True) -> None:
+    def __init__(self, sensor: RadarSensor) -> None:
         self.sensor = sensor
-        self.use_numba = use_numba
         fm, proc, cfar = sensor.fmcw, sensor.processor, sensor.cfar
         self.ns, self.nc = fm.samples_per_chirp, fm.chirps_per_frame
         name = sensor.config.window
@@ -74,7 +78,7 @@ class FastDetectionModel:
             self.noise_stat = 1.0
 
     @classmethod
-    def for_sensor(cls, sensor) -> FastDetectionModel:
+    def for_sensor(cls, sensor: RadarSensor) -> FastDetectionModel:
         return cls(sensor)
 
     def _extent(self, env: np.ndarray, ratio: np.ndarray) -> np.ndarray:
@@ -96,7 +100,7 @@ class FastDetectionModel:
         peak = paths.power_w[order] * proc.coherent_gain2
         phase = paths.phase_rad[order]
         # --- merge paths within one resolution cell of a stronger one (greedy by power)
-        owner = greedy_owner(rb, db, self.res_r, self.res_d, nc, self.use_numba)
+        owner = greedy_owner(rb, db, self.res_r, self.res_d, nc)
         heads = np.flatnonzero(owner == np.arange(len(rb)))
         wsum = np.bincount(owner, weights=peak, minlength=len(rb))[heads]
         crb = np.bincount(owner, weights=peak * rb, minlength=len(rb))[heads] / wsum

@@ -22,7 +22,7 @@ import math
 import numpy as np
 from scipy.constants import Boltzmann
 
-from lrp_gym.radar.fmcw import FmcwParameters
+from lrp_gym.waveform import FmcwParameters
 
 #: the range steering vector is built as an outer product of two short tables of this length
 _SPLIT = 16

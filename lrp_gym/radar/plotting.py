@@ -29,12 +29,12 @@ def plot_range_doppler(
         cmap="viridis",
         vmin=top - 90,
         vmax=top,
-        extent=[
+        extent=(
             velocity_axis_mps[0] - dv / 2,
             velocity_axis_mps[-1] + dv / 2,
             range_axis_m[0] - dr / 2,
             range_axis_m[-1] + dr / 2,
-        ],
+        ),
     )
     fig.colorbar(im, ax=ax, label="power at antenna [dBm]")
     if len(detections):

@@ -21,7 +21,7 @@ import scipy.fft
 from scipy.signal import get_window
 
 from lrp_gym.radar.cfar import Cfar2D
-from lrp_gym.radar.fmcw import FmcwParameters
+from lrp_gym.waveform import FmcwParameters
 
 _WINDOW_NAMES = {"hann": "hann", "hamming": "hamming", "blackman": "blackman", "rect": "boxcar"}
 
@@ -95,9 +95,7 @@ class RangeDopplerProcessor:
     cfar : Cfar2D
     """
 
-    def __init__(
-        self, fmcw: FmcwParameters, window_name: str = "hann", cfar: Cfar2D | None = None
-    ) -> None:
+    def __init__(self, fmcw: FmcwParameters, window_name: str, cfar: Cfar2D) -> None:
         self.fmcw = fmcw
         ns, nc = fmcw.samples_per_chirp, fmcw.chirps_per_frame
         self.range_table = window_table(window_name, ns)
@@ -105,7 +103,7 @@ class RangeDopplerProcessor:
         self.window2d = np.outer(window(window_name, ns), window(window_name, nc)).astype(
             np.float32
         )
-        self.cfar = cfar or Cfar2D()
+        self.cfar = cfar
         self.coherent_gain2 = (
             self.range_table.coherent_gain * self.doppler_table.coherent_gain
         ) ** 2
@@ -117,10 +115,6 @@ class RangeDopplerProcessor:
     def resolution_cell_m(self) -> float:
         """Smallest range separation of two equal targets that the window keeps apart."""
         return self.range_table.resolution_bins * self.fmcw.range_resolution_m
-
-    @property
-    def resolution_cell_mps(self) -> float:
-        return self.doppler_table.resolution_bins * self.fmcw.velocity_resolution_mps
 
     def power_map(self, cube: np.ndarray) -> np.ndarray:
         """Square-law range-Doppler map (N_s x N_c), Doppler fftshifted, in W x gains."""

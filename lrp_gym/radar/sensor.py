@@ -19,6 +19,7 @@ from lrp_gym.radar.antenna import ZenithPattern
 from lrp_gym.radar.cfar import Cfar2D
 from lrp_gym.radar.channel import Channel, Paths
 from lrp_gym.radar.detections import Detections
+from lrp_gym.radar.fast import FastDetectionModel
 from lrp_gym.radar.frontend import beat_cube, link_constant_w_m2, noise_power_w
 from lrp_gym.radar.processing import RangeDopplerProcessor
 from lrp_gym.world.world import World
@@ -72,10 +73,7 @@ class RadarSensor:
             ),
             min_power_w=self.min_path_power_w,
         )
-        c = radar.cfar
-        self.cfar = Cfar2D(
-            c.method, tuple(c.guard_cells), tuple(c.training_cells), c.pfa, c.os_rank
-        )
+        self.cfar = Cfar2D.from_config(radar.cfar)
         self.processor = RangeDopplerProcessor(self.fmcw, radar.window, self.cfar)
         #: noise power of one map cell (the noise level in map units, also with noise off)
         self.noise_cell = self.noise_w * self.processor.noise_gain
@@ -86,8 +84,6 @@ class RadarSensor:
         self.last_paths: Paths | None = None
         self._fast = None
         if self.fidelity == "detections":
-            from lrp_gym.radar.fast import FastDetectionModel
-
             self._fast = FastDetectionModel.for_sensor(self)
 
     @property

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 
@@ -39,7 +40,7 @@ def bench_tracking(cfg: ScenarioConfig, seconds: float) -> dict:
         DistancePrior.from_pose(world.layout, world.mount_height_m, xy, cov) for xy in poses[:, :2]
     ]
     no_aid = [None] * len(traj)
-    cases = {
+    cases: dict[str, tuple[dict[str, Any], list[Any], list[Any]]] = {
         "clean": (dict(miss_probability=0.0, clutter_per_frame=0.0), no_aid, no_aid),
         "clutter": ({}, no_aid, no_aid),
         "clutter_map_aided": ({}, ego, priors),

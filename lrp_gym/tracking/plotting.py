@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from lrp_gym.tracking.evaluate import TrackRun
+if TYPE_CHECKING:
+    from lrp_gym.experiments.track_path import TrackRun
 
 
 def plot_track_run(
@@ -21,7 +24,7 @@ def plot_track_run(
 
     n_types = len(type_names)
     fig, axes = plt.subplots(1, n_types, figsize=(6.5 * n_types, 4), squeeze=False)
-    frames = np.arange(len(run.trajectory))
+    frames = range(len(run.trajectory))
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for t, ax in enumerate(axes[0]):
         refl = np.flatnonzero(type_index == t)

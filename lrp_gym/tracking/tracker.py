@@ -96,7 +96,9 @@ class LrpTracker:
             layout, cfg, max_range_m=max_range_m, min_range_m=min_range_m
         )
         self._capacity = layout.counts_per_type()
-        self.identifier = ReflectorIdentifier(cfg, self.classifier, self._capacity, self.type_names)
+        self.identifier = ReflectorIdentifier(
+            cfg, self.classifier, tuple(int(c) for c in self._capacity), self.type_names
+        )
         dz = np.abs(layout.positions_m[:, 2] - mount_height_m)
         # A type may be defined without any reflector (a catalogue): it never has a track, so
         # its heights are placeholders.
@@ -186,9 +188,10 @@ class LrpTracker:
         """
         if not dt_s > 0:
             raise ValueError(f"dt_s must be positive, got {dt_s}")
-        static = ego is not None and self._speed_mps is not None
-        if static:
-            self._predict_static(float(dt_s), ego)
+        prev_speed = self._speed_mps
+        static = ego is not None and prev_speed is not None
+        if ego is not None and prev_speed is not None:
+            self._predict_static(float(dt_s), ego, prev_speed)
         else:
             self._predict_cv(float(dt_s))
         for t in self._tracks:
@@ -203,7 +206,7 @@ class LrpTracker:
         explained = np.zeros(len(detections), dtype=bool)
         if self._tracks and len(detections):
             cost, ok, in_range_gate, d2 = self._gate(detections, z, cand, strict_all=static)
-            explained = in_range_gate.any(axis=0)
+            explained = np.asarray(in_range_gate.any(axis=0))
             confirmed = np.array([t.confirmed for t in self._tracks])
             # Persistent returns choose first; tentative ones share what is left.
             for rows in (np.flatnonzero(confirmed), np.flatnonzero(~confirmed)):
@@ -288,14 +291,14 @@ class LrpTracker:
         for t in self._tracks:
             t.kf.predict(F=F, Q=Q)
 
-    def _predict_static(self, dt_s: float, ego: EgoMotion) -> None:
+    def _predict_static(self, dt_s: float, ego: EgoMotion, prev_speed_mps: float) -> None:
         """Extended-Kalman prediction of every track as a static point of its type's height."""
         if not self._tracks:
             return
         x = np.array([t.kf.x[:, 0] for t in self._tracks])  # (n, 2)
         P = np.array([t.kf.P for t in self._tracks])  # (n, 2, 2)
         h = self._height_m[[t.type_index for t in self._tracks]]
-        prev = float(self._speed_mps)
+        prev = float(prev_speed_mps)
         # One call on the state and its two forward-difference neighbours (for the Jacobian).
         n, eps = len(x), 1e-4
         xs = np.concatenate([x, x + [eps, 0.0], x + [0.0, eps]])
@@ -423,5 +426,3 @@ class LrpTracker:
             kf.R = self._R
             self._tracks.append(Track(self._next_id, int(ty), kf, float(detections.rcs_dbsm[d])))
             self._next_id += 1
-
-    # ------------------------------------------------------------------ identification

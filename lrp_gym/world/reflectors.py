@@ -9,6 +9,12 @@ import numpy as np
 REFLECTOR_KINDS = ("trihedral", "sphere", "luneburg", "van_atta", "point")
 
 
+def _given(value: float | None, name: str, kind: str) -> float:
+    if value is None:
+        raise ValueError(f"{name}: a {kind} reflector needs it")
+    return float(value)
+
+
 def rcs_peak_m2(
     kind: str,
     wavelength_m: float,
@@ -32,15 +38,16 @@ def rcs_peak_m2(
     """
     lam2 = wavelength_m**2
     if kind == "trihedral":
-        return 4.0 * np.pi * edge_m**4 / (3.0 * lam2)
+        return 4.0 * np.pi * _given(edge_m, "edge_m", kind) ** 4 / (3.0 * lam2)
     if kind == "sphere":
-        return np.pi * (diameter_m / 2.0) ** 2
+        return np.pi * (_given(diameter_m, "diameter_m", kind) / 2.0) ** 2
     if kind == "luneburg":
-        return 4.0 * np.pi**3 * (diameter_m / 2.0) ** 4 / lam2
+        return 4.0 * np.pi**3 * (_given(diameter_m, "diameter_m", kind) / 2.0) ** 4 / lam2
     if kind == "van_atta":
-        return 4.0 * np.pi * (elements * element_area_m2) ** 2 / lam2
+        n = _given(elements, "elements", kind)
+        return 4.0 * np.pi * (n * _given(element_area_m2, "element_area_m2", kind)) ** 2 / lam2
     if kind == "point":
-        return float(10.0 ** (rcs_dbsm / 10.0))
+        return float(10.0 ** (_given(rcs_dbsm, "rcs_dbsm", kind) / 10.0))
     raise ValueError(f"unknown reflector kind {kind!r}; expected one of {REFLECTOR_KINDS}")
 
 

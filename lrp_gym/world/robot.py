@@ -67,9 +67,9 @@ class OdometryNoise:
       ``a1 |turn| + a2 |trans|``, of the distance ``a3 |trans| + a4 (|rot1| + |rot2|)``.
     """
 
-    sigma_turn_rad: float = np.deg2rad(5.0)
-    sigma_distance_m: float = 0.05
-    alphas: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    sigma_turn_rad: float
+    sigma_distance_m: float
+    alphas: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0)  # a1..a4
 
     def std(self, delta: np.ndarray) -> np.ndarray:
         """Standard deviations (..., 3) of (rot1, trans, rot2) for odometry deltas (..., 3)."""
@@ -83,7 +83,7 @@ class OdometryNoise:
     def sample(self, delta: np.ndarray, size: int | tuple, rng: np.random.Generator) -> np.ndarray:
         """Noisy copies of one delta (3,): array of shape ``size + (3,)``."""
         delta = np.asarray(delta, dtype=float)
-        size = (size,) if np.isscalar(size) else tuple(size)
+        size = (int(size),) if isinstance(size, (int, np.integer)) else tuple(size)
         return delta + rng.standard_normal(size + (3,)) * self.std(delta)
 
 
@@ -126,7 +126,7 @@ class DiffDriveLimits:
         Footprint radius used for collision checks.
     """
 
-    max_speed_mps: float = 1.0
-    max_reverse_mps: float = 0.2
-    max_turn_rate_rps: float = np.deg2rad(120.0)
-    radius_m: float = 0.2
+    max_speed_mps: float
+    max_reverse_mps: float
+    max_turn_rate_rps: float
+    radius_m: float

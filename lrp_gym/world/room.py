@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -28,12 +28,16 @@ class Box:
 
 @dataclass(frozen=True)
 class Surfaces:
-    """Amplitude reflection coefficients |Gamma| (0..1) of the room's surfaces."""
+    """Amplitude reflection coefficients |Gamma| (0..1) of the room's surfaces.
 
-    walls: float = 0.6
-    floor: float = 0.5
-    ceiling: float = 0.5
-    obstacles: float = 0.7
+    No defaults here: the values come from the validated ``room.surfaces`` of a scenario
+    (:class:`lrp_gym.config.SurfacesConfig` holds the defaults and why they were chosen).
+    """
+
+    walls: float
+    floor: float
+    ceiling: float
+    obstacles: float
 
     def face_coefficients(self) -> np.ndarray:
         """Coefficients of the six room faces, ordered x=0, x=Lx, y=0, y=Ly, z=0, z=Lz."""
@@ -50,13 +54,14 @@ class Room:
         Room extent (Lx, Ly, Lz) in metres.
     obstacles : tuple of Box
         Axis-aligned obstacles; they block the robot and radar paths and reflect.
-    surfaces : Surfaces
-        Reflection coefficients.
+    surfaces : Surfaces, optional
+        Reflection coefficients; None for a room used only for its geometry (free-space and
+        path checks), which the radar channel refuses.
     """
 
     size_m: np.ndarray
     obstacles: tuple[Box, ...] = ()
-    surfaces: Surfaces = field(default_factory=Surfaces)
+    surfaces: Surfaces | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "size_m", np.asarray(self.size_m, dtype=float))

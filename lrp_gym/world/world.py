@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from lrp_gym.config import ScenarioConfig
-from lrp_gym.radar.fmcw import FmcwParameters
+from lrp_gym.waveform import FmcwParameters
 from lrp_gym.world.reflectors import ReflectorLayout, ReflectorType, rcs_peak_m2
 from lrp_gym.world.robot import DiffDriveLimits, OdometryNoise
 from lrp_gym.world.room import Box, Room, Surfaces
+
+if TYPE_CHECKING:
+    # The schema validates against the world's geometry (config/checks.py), so it sits above it.
+    from lrp_gym.config import ScenarioConfig
 
 
 @dataclass(frozen=True)

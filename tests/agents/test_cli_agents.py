@@ -88,7 +88,7 @@ def test_evaluate_json_has_the_documented_keys(capsys):
 
 def test_evaluate_task_overrides_the_scenario_mode(capsys, monkeypatch):
     """--task goal turns a path scenario into sampled-goal episodes in its room and layout."""
-    from agents import evaluate as ev
+    from lrp_gym.experiments import episodes as ev
 
     made = []
     original = ev.make_eval_env

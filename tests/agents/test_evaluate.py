@@ -5,16 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agents.evaluate import (
+from agents.evaluate import RandomPolicy, make_agent
+from lrp_gym.errors import InputError
+from lrp_gym.experiments.episodes import (
     EpisodeResult,
-    RandomPolicy,
     cross_track_m,
-    evaluate,
-    make_agent,
     make_eval_env,
     summarize,
 )
-from lrp_gym.errors import InputError
+from lrp_gym.experiments.episodes import run_episodes as evaluate
 
 
 def test_cross_track_is_distance_to_polyline():
@@ -96,17 +95,17 @@ def test_gif_has_one_frame_per_step(tmp_path):
     assert len(frames) == s["per_episode"][0]["steps"] + 1
 
 
-def test_bad_inputs_raise_input_error(tmp_path):
+def test_bad_inputs_raise_value_error_naming_the_argument(tmp_path):
     env = make_eval_env("pure-pursuit", "LRPRadarNavFast-v0")
-    with pytest.raises(InputError, match="--episodes"):
+    with pytest.raises(ValueError, match="^n_episodes: "):
         evaluate(make_agent("pure-pursuit", env), env, 0)
-    with pytest.raises(InputError, match="--agent"):
+    with pytest.raises(ValueError, match="^agent: "):
         make_agent("sarsa", env)
-    with pytest.raises(InputError, match="--env"):
+    with pytest.raises(ValueError, match="^env_id: "):
         make_eval_env("pure-pursuit", "CartPole-v9")
     bad = tmp_path / "model.zip"
     bad.write_bytes(b"not a zip")
     with pytest.raises(InputError, match="not a readable PPO model"):
         make_agent("ppo", env, bad)
-    with pytest.raises(InputError, match="no such model"):
+    with pytest.raises(ValueError, match="^model_path: no such model"):
         make_agent("ppo", env, tmp_path / "missing.zip")

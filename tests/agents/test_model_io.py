@@ -12,9 +12,10 @@ import numpy as np
 import pytest
 
 from agents import model_io
-from agents.evaluate import DEFAULT_MODEL, MODELS_DIR, load_ppo, make_agent, make_eval_env
+from agents.evaluate import DEFAULT_MODEL, MODELS_DIR, load_ppo, make_agent
 from lrp_gym.cli import main
 from lrp_gym.errors import InputError
+from lrp_gym.experiments.episodes import make_eval_env
 
 
 class _Boom:

@@ -8,9 +8,11 @@ import numpy as np
 import pytest
 import yaml
 
-from agents.evaluate import DEFAULT_MODEL, evaluate, load_ppo, make_agent, make_eval_env
+from agents.evaluate import DEFAULT_MODEL, load_ppo, make_agent
 from agents.ppo import export_model, list_checkpoints, load_hyperparams, split_hyperparams, train
 from lrp_gym.errors import InputError
+from lrp_gym.experiments.episodes import make_eval_env
+from lrp_gym.experiments.episodes import run_episodes as evaluate
 
 ENV = "LRPRadarNavFast-v0"
 
@@ -49,7 +51,7 @@ def test_split_hyperparams_follows_zoo_conventions(tmp_path):
 
 
 def test_config_errors(tmp_path):
-    with pytest.raises(InputError, match="--config"):
+    with pytest.raises(ValueError, match="^config: no such file"):
         load_hyperparams(tmp_path / "nope.yaml")
     with pytest.raises(InputError, match="no section"):
         load_hyperparams(tiny_config(tmp_path), "LRPRadarNav-v0")
@@ -123,7 +125,7 @@ def test_smoke_train_save_reload_evaluate_and_resume(tmp_path):
 
 
 def test_resume_without_checkpoint_is_input_error(tmp_path):
-    with pytest.raises(InputError, match="--resume"):
+    with pytest.raises(ValueError, match="^resume: no checkpoint"):
         train(tiny_config(tmp_path), out=tmp_path / "empty", resume=True, progress_bar=False)
 
 

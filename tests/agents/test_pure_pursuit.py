@@ -69,7 +69,7 @@ def test_closed_loop_on_paper_path_reaches_goal_and_tracks_path(paper_cfg):
     assert np.linalg.norm(pose[:2] - path.goal_m) <= paper_cfg.task.goal_tolerance_m
     # 7 m at <= 2 m/s takes >= 14 frames; slowing in bends must not double that.
     assert 14 <= len(xy) <= 28
-    from agents.evaluate import cross_track_m
+    from lrp_gym.experiments.episodes import cross_track_m
 
     assert cross_track_m(np.array(xy), path.waypoints_m).max() < 0.3
 

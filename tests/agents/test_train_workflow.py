@@ -16,7 +16,6 @@ import pytest
 import yaml
 
 from agents.ppo import list_checkpoints, load_hyperparams, train
-from lrp_gym.errors import InputError
 
 ENV = "LRPRadarNavFast-v0"
 
@@ -58,14 +57,14 @@ def test_short_run_ends_with_checkpoint_and_evaluation_then_resume_and_force(tmp
     # A finished run is not overwritten by accident.
     first = (run / "final" / "model.zip").read_bytes()
     (run / "notes.txt").write_text("mine")
-    with pytest.raises(InputError, match="--out: .* holds a finished run of 128 steps.*--force"):
+    with pytest.raises(ValueError, match="^out: .* holds a finished run of 128 steps.*force"):
         train(cfg, timesteps=64, out=run, progress_bar=False)
     assert (run / "final" / "model.zip").read_bytes() == first
-    with pytest.raises(InputError, match="--force: cannot be combined with --resume"):
+    with pytest.raises(ValueError, match="^force: cannot be combined with resume"):
         train(cfg, timesteps=64, out=run, resume=True, force=True, progress_bar=False)
 
     # --resume extends it; the learning curve continues.
-    with pytest.raises(InputError, match="--timesteps: the run already has 128 steps"):
+    with pytest.raises(ValueError, match="^timesteps: the run already has 128 steps"):
         train(cfg, timesteps=128, out=run, resume=True, progress_bar=False)
     info = train(cfg, timesteps=192, out=run, resume=True, progress_bar=False)
     assert info["resumed_from"] == 128 and info["timesteps"] == info["target_timesteps"] == 192
@@ -73,7 +72,7 @@ def test_short_run_ends_with_checkpoint_and_evaluation_then_resume_and_force(tmp
         assert list(d["timesteps"]) == [128, 192]
     # ... but never without the normalisation statistics.
     (run / "checkpoints" / "rl_model_vecnormalize_192_steps.json").unlink()
-    with pytest.raises(InputError, match="--resume: .*192_steps.zip has no normalisation"):
+    with pytest.raises(ValueError, match="^resume: .*192_steps.zip has no normalisation"):
         train(cfg, timesteps=256, out=run, resume=True, progress_bar=False)
 
     # --force starts over and removes only what a run writes.
@@ -86,7 +85,7 @@ def test_default_config_is_found_from_any_directory(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     env_id, raw = load_hyperparams()
     assert env_id == ENV and raw["n_envs"] >= 1
-    with pytest.raises(InputError, match="--env: .* has no section 'Nope-v0'"):
+    with pytest.raises(ValueError, match="^env_id: .* has no section 'Nope-v0'"):
         load_hyperparams(None, "Nope-v0")
 
 

@@ -14,9 +14,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lrp_gym  # noqa: F401  (registers the env ids)
-from agents.evaluate import make_agent, run_episode
+from agents.evaluate import make_agent
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.envs import ENV_VARIANTS
+from lrp_gym.experiments.episodes import run_episode
 from lrp_gym.experiments.reproduce import reproduce
 from lrp_gym.experiments.scenarios import random_scenario
 

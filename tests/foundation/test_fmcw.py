@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from lrp_gym.radar.fmcw import FmcwParameters
+from lrp_gym.waveform import FmcwParameters
 
 # The paper rounds c to 3e8 m/s; we use the exact speed of light, hence rel=2e-3.
 REL = 2e-3

@@ -97,6 +97,9 @@ def test_structure_and_ghost_probabilities_must_leave_room_for_the_reflectors(pa
         FingerprintModel(
             paper_world.layout,
             paper_world.mount_height_m,
+            0.075,
+            0.2,
+            paper_world.fmcw.max_range_m,
             room=paper_world.room,
             structure_probability=0.7,
             ghost_probability=0.4,

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from lrp_gym.envs.nav_env import LRPRadarNavEnv
+from lrp_gym.experiments.track_path import ego_motions
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.stack import LocalizationStack
 from lrp_gym.radar.sensor import RadarSensor
-from lrp_gym.tracking.evaluate import ego_motions
 from lrp_gym.tracking.prior import DistancePrior
 from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world import OdometryNoise, noisy_odometry, odometry_delta
@@ -126,7 +126,7 @@ def test_noisy_odometry_first_frame_draws_nothing():
     rng = np.random.default_rng(0)
     state = rng.bit_generator.state
     np.testing.assert_array_equal(
-        noisy_odometry(OdometryNoise(), None, np.ones(3), rng), np.zeros(3)
+        noisy_odometry(OdometryNoise(0.1, 0.05), None, np.ones(3), rng), np.zeros(3)
     )
     assert rng.bit_generator.state == state
     prev, pose = np.array([0.0, 0.0, 0.1]), np.array([0.3, 0.4, 0.5])

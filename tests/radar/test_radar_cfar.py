@@ -7,8 +7,8 @@ import pytest
 from scipy.ndimage import maximum_filter, rank_filter
 
 from lrp_gym.radar.cfar import Cfar2D
-from lrp_gym.radar.fmcw import FmcwParameters
 from lrp_gym.radar.processing import RangeDopplerProcessor
+from lrp_gym.waveform import FmcwParameters
 
 WINDOWS = [((2, 1), (8, 3)), ((0, 0), (3, 0)), ((1, 1), (4, 2))]
 
@@ -23,7 +23,7 @@ def _map(seed=0):
 @pytest.mark.parametrize("method", ["CA", "SO", "GO", "OS"])
 @pytest.mark.parametrize(("guard", "train"), WINDOWS)
 def test_threshold_at_matches_full_map(method, guard, train):
-    cfar = Cfar2D(method, guard, train, 1e-3)
+    cfar = Cfar2D(method, guard, train, 1e-3, 0.75)
     m = _map()
     rows, cols = np.divmod(np.arange(m.size), m.shape[1])
     at = cfar.threshold_at(cfar.pad(m), rows, cols).reshape(m.shape)
@@ -43,7 +43,7 @@ def test_os_matches_scipy_rank_filter():
 
 @pytest.mark.parametrize("method", ["CA", "SO", "GO", "OS"])
 def test_prethreshold_is_safe(method):
-    cfar = Cfar2D(method, (2, 1), (8, 3), 1e-6)
+    cfar = Cfar2D(method, (2, 1), (8, 3), 1e-6, 0.75)
     q = cfar.prethreshold_fraction
     assert q > 0.0
     assert cfar.statistic_cdf(q) <= 1e-3 * cfar.pfa
@@ -57,7 +57,7 @@ def test_prethreshold_is_safe(method):
 @pytest.mark.parametrize("method", ["CA", "SO", "GO", "OS"])
 def test_false_alarm_rate_full_map_and_candidate_path(method):
     pfa = 1e-3
-    cfar = Cfar2D(method, (2, 1), (8, 3), pfa)
+    cfar = Cfar2D(method, (2, 1), (8, 3), pfa, 0.75)
     rng = np.random.default_rng(3)
     maps = rng.exponential(1.0, (40, 256, 32))
     fa = np.mean([cfar.detect(m).mean() for m in maps])

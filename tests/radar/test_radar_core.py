@@ -115,7 +115,7 @@ def test_two_targets_resolution(paper_cfg, window):
 
 @pytest.mark.parametrize("method", ["CA", "SO", "GO", "OS"])
 def test_cfar_false_alarm_rate(method):
-    cfar = Cfar2D(method, (2, 1), (8, 3), 1e-3)
+    cfar = Cfar2D(method, (2, 1), (8, 3), 1e-3, 0.75)
     rng = np.random.default_rng(3)
     maps = rng.exponential(1.0, (40, 256, 32))
     fa = np.mean([cfar.detect(m).mean() for m in maps])

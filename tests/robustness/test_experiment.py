@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from lrp_gym.cli import main
-from lrp_gym.errors import InputError
 from lrp_gym.experiments.robustness import cell_overrides, recovery_frames, run_matrix
 
 
@@ -24,11 +23,22 @@ def test_cell_overrides():
     assert cell_overrides("clutter", 0.5) == {"perturbations": {"clutter": {"severity": 0.5}}}
 
 
-def test_bad_matrix_arguments_are_input_errors():
-    with pytest.raises(InputError, match="--perturbations"):
-        run_matrix(perturbations=["quake"], episodes=1)
-    with pytest.raises(InputError, match="--severities"):
-        run_matrix(perturbations=["clutter"], severities=[1.5], episodes=1)
+def _no_policy(env):
+    raise AssertionError("the arguments are checked before any env or policy is built")
+
+
+def test_bad_matrix_arguments_are_value_errors_naming_the_argument():
+    with pytest.raises(ValueError, match="^perturbations: "):
+        run_matrix(_no_policy, perturbations=["quake"], episodes=1)
+    with pytest.raises(ValueError, match="^severities: "):
+        run_matrix(_no_policy, perturbations=["clutter"], severities=[1.5], episodes=1)
+
+
+def test_cli_names_the_flag_of_a_bad_matrix_argument(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["robustness", "--severities", "2", "--episodes", "1"])
+    assert exc.value.code == 2
+    assert "error: --severities:" in capsys.readouterr().err
 
 
 def test_tiny_matrix_end_to_end_via_cli(capsys, tmp_path):

@@ -34,7 +34,7 @@ def test_map_aided_identification_on_the_real_chain():
     """On the paper scenario, the AMCL prior makes the tracked fingerprint several times
     closer to the truth than the paper's RCS-and-motion identification alone."""
     from lrp_gym.config import load_scenario
-    from lrp_gym.tracking.evaluate import run_path
+    from lrp_gym.experiments.track_path import run_path
 
     cfg = load_scenario("ipin2023")
     aided = [run_path(cfg, s).summary["tracked_rmse_m"] for s in range(2)]

@@ -1,4 +1,4 @@
-"""Drive a scenario's path through the radar chain and the tracker; score against the truth."""
+"""Drive a scenario's path through the radar chain, the tracker and AMCL; score against the truth."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from lrp_gym.config import ScenarioConfig
+from lrp_gym.localization.stack import LocalizationStack
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.metrics import SwapCounter, per_type_errors_m
@@ -91,8 +92,6 @@ def run_path(
     with ``use_ego`` the tracker gets the robot's (noisy) odometry and predicts static points
     (:mod:`lrp_gym.tracking.motion`), else the paper's constant-velocity model.
     """
-    from lrp_gym.localization.stack import LocalizationStack  # above tracking: runs both
-
     if len(cfg.task.path) < 2:
         raise ValueError("task.path needs at least two waypoints")
     world = World.from_config(cfg)
@@ -116,6 +115,8 @@ def run_path(
     for k in range(len(traj)):
         frame = stack.step(traj.poses[k], traj.velocities_xy_mps[k], ego[k].odometry, rng)
         det, fp = frame.detections, frame.fingerprint
+        if det is None:  # the path drive never skips the radar
+            raise RuntimeError(f"frame {k}: the stack returned no detections")
         cls = tracker.classifier.classify(det)
         gated = tuple(det.range_m[cls == t] for t in range(n_types))
         raw[k] = match_to_truth(gated, truth[k], ti)

@@ -14,6 +14,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from lrp_gym.config.base import _fmt
+from lrp_gym.world.room import Box, Room
+
 if TYPE_CHECKING:
     from lrp_gym.config import ScenarioConfig
 
@@ -24,16 +27,8 @@ FREE_GRID_M = 0.05
 GOAL_MARGIN_M = 0.1
 
 
-def _fmt(value) -> str:
-    from lrp_gym.config import _fmt as fmt
-
-    return fmt(value)
-
-
 def cross_problems(cfg: ScenarioConfig) -> Iterator[str]:
     """Yield one ``field: message`` per cross-field problem of ``cfg``."""
-    from lrp_gym.world.room import Box, Room
-
     room = Room(
         np.asarray(cfg.room.size, dtype=float),
         tuple(Box(b.min, b.max) for b in cfg.room.obstacles),

@@ -41,11 +41,6 @@ class FmcwParameters:
         return C / self.carrier_hz
 
     @property
-    def slope_hz_per_s(self) -> float:
-        """Chirp slope S = B / T_c."""
-        return self.bandwidth_hz / self.chirp_period_s
-
-    @property
     def sample_rate_hz(self) -> float:
         return self.samples_per_chirp / self.chirp_period_s
 

@@ -1,0 +1,114 @@
+"""Schema of the localisers (AMCL, grid) and their measurement model."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import (
+    Field,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
+
+from lrp_gym.config.base import Fraction, NonNegFloat, PositiveFloat, Probability, Strict, Vec3
+
+
+class MotionNoiseConfig(Strict):
+    """AMCL's motion model: the paper's sigmas on turned angle and distance, plus alphas."""
+
+    sigma_turn_deg: NonNegFloat = 5.0
+    sigma_distance_m: NonNegFloat = 0.05
+    alphas: Annotated[list[NonNegFloat], Field(min_length=4, max_length=4)] = [0.0, 0.0, 0.0, 0.0]
+
+
+class LocalizationConfig(Strict):
+    method: Literal["amcl", "lut", "grid"] = "amcl"
+    lut_resolution_m: PositiveFloat = 0.075
+    lut_grid_m: PositiveFloat = 0.025
+    # Histogram filter (method grid, lrp_gym.localization.grid): cell size in x, y and heading.
+    grid_cell_m: PositiveFloat = 0.05
+    grid_cell_deg: Annotated[float, Field(gt=0.0, le=180.0)] = 5.0
+    initial_particles: Annotated[int, Field(ge=10)] = 10000
+    min_particles: Annotated[int, Field(ge=10)] = 200
+    max_particles: Annotated[int, Field(ge=10)] = 10000
+    kld_error: Probability = 0.05
+    kld_quantile: Probability = 0.99
+    kld_bin_m: PositiveFloat = 0.1
+    kld_bin_deg: PositiveFloat = 10.0
+    motion_noise: MotionNoiseConfig = MotionNoiseConfig()
+    measurement_std_m: PositiveFloat = 0.075
+    measurements: Literal["detections", "tracks"] = Field(
+        default="detections",
+        description="what AMCL weighs: every RCS-gated detection, or the tracked fingerprint",
+    )
+    recovery_measurements: Literal["detections", "tracks"] = Field(
+        default="tracks",
+        description="what augmented MCL's fit statistic scores: the measurements AMCL weighs, "
+        "or the tracker's persistent tracks updated in this frame (default: one-frame "
+        "clutter does not keep a lost filter's fit up)",
+    )
+    clutter_probability: Fraction = 0.2
+    structure_probability: Fraction = 0.6
+    ghost_probability: Fraction = Field(
+        default=0.1,
+        description="probability that a measured distance is a reflector seen via a wall or "
+        "the ceiling (its image source); with structure_probability at most 1",
+    )
+    doppler_std_mps: NonNegFloat = Field(
+        default=0.15,
+        description="std of a return's measured radial velocity in AMCL's likelihood (heading "
+        "evidence while moving); 0 weighs the distances only",
+    )
+    doppler_outlier_probability: Fraction = 0.1
+    detection_probability: Fraction = Field(
+        default=0.0,
+        description="probability that a reflector yields a detection; > 0 penalises poses "
+        "whose reflectors no measured distance matches (negative information)",
+    )
+    global_proposal: bool = Field(
+        default=True,
+        description="draw the global start and recovery particles from a map-wide grid of the "
+        "frame likelihood, and test whether the cloud has lost the robot",
+    )
+    global_grid_m: PositiveFloat = 0.1
+    likelihood_exponent: Annotated[float, Field(gt=0.0, le=1.0)] = Field(
+        default=0.5,
+        description="power of each frame's likelihood (< 1 tempers it: frames' errors are "
+        "correlated, so their product would overcount the evidence)",
+    )
+    mode_min_particles: Annotated[int, Field(ge=0)] = Field(
+        default=100,
+        description="particles every posterior mode keeps through resampling (weighted by its "
+        "mass), so that a minority mode survives until the evidence decides; 0: plain resampling",
+    )
+    lost_drift_nats: NonNegFloat = 4.0
+    lost_threshold_nats: PositiveFloat = 8.0
+    lost_restart_nats: PositiveFloat = 20.0
+    resample_ess_ratio: Fraction = 0.5
+    alpha_slow: Fraction = 0.02
+    alpha_fast: Fraction = 0.3
+    max_random_fraction: Fraction = 0.25
+    recovery_fit_ratio: Annotated[float, Field(gt=0.0, le=1.0)] = 0.8
+    estimator: Literal["best_k", "cluster"] = "cluster"
+    estimate_best_k: Annotated[int, Field(ge=1)] = 20
+    estimate_radius_m: PositiveFloat = 0.15
+    init: Literal["uniform", "gaussian"] = "uniform"
+    init_std: Vec3 = [0.3, 0.3, 0.35]
+    converged_std_m: PositiveFloat = 0.25
+    converged_mass: Annotated[float, Field(gt=0.0, le=1.0)] = 0.9
+
+    @model_validator(mode="after")
+    def _counts(self) -> LocalizationConfig:
+        if not self.min_particles <= self.max_particles:
+            raise PydanticCustomError(
+                "particles",
+                "min_particles ({a}) must not exceed max_particles ({b})",
+                {"a": self.min_particles, "b": self.max_particles},
+            )
+        if self.structure_probability + self.ghost_probability > 1.0:
+            raise PydanticCustomError(
+                "mixture",
+                "structure_probability ({a}) + ghost_probability ({b}) must not exceed 1",
+                {"a": self.structure_probability, "b": self.ghost_probability},
+            )
+        return self
