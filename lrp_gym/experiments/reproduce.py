@@ -80,6 +80,9 @@ class Reproduction:
                 "mean_errors_m": amcl_mean,
                 "std_errors_m": self.amcl_errors_m.std(axis=0),
                 "mean_error_m": float(amcl_mean.mean()),
+                # each run's mean over the path: a mirror jump in one run shows here
+                "run_mean_errors_m": self.amcl_errors_m.mean(axis=1),
+                "worst_run_mean_error_m": float(self.amcl_errors_m.mean(axis=1).max()),
                 "converged_after": self.converged_after,
                 "mean_particles": self.amcl_particles.mean(axis=0),
             },
