@@ -18,9 +18,9 @@ from gymnasium.error import ResetNeeded
 from lrp_gym.config import ScenarioConfig, load_scenario
 from lrp_gym.envs.observations import NavSnapshot, make_observation
 from lrp_gym.envs.task import WaypointPath, sample_goal_task
-from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.localization.factory import Localizer
 from lrp_gym.localization.lut import LookupTable
+from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.localization.stack import FrameResult, LocalizationStack
 from lrp_gym.perturbations import FrameContext, PerturbationSet
 from lrp_gym.radar.detections import Detections

@@ -29,7 +29,7 @@ from lrp_gym.localization.stack import FrameResult, LocalizationStack
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
-from lrp_gym.tracking.motion import EgoMotion
+from lrp_gym.tracking.range_prediction import EgoMotion
 from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world.robot import noisy_odometry
 from lrp_gym.world.trajectory import Trajectory, path_trajectory

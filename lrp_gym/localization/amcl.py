@@ -3,11 +3,11 @@
 One :meth:`Amcl.update` per radar frame:
 
 1. *predict*: every particle moves by the odometry (rot1, trans, rot2) with its own sampled
-   noise (:mod:`~lrp_gym.localization.motion`); particles that leave the free space (room and
+   noise (:mod:`~lrp_gym.localization.particle_motion`); particles that leave the free space (room and
    obstacles grown by the robot radius) get weight zero;
 2. *weight*: multiply by the likelihood of the fingerprint (:mod:`~lrp_gym.localization.likelihood`);
 3. *estimate*: the paper's best-k rule or the heaviest cluster
-   (:mod:`~lrp_gym.localization.estimators`), with a 3x3 covariance about the estimate;
+   (:mod:`~lrp_gym.localization.particle_statistics`), with a 3x3 covariance about the estimate;
 4. *resample* when the effective sample size falls below ``resample_ess_ratio * N``:
    low-variance resampling to a KLD-sampling particle count, with a share of uniformly drawn
    particles given by the ``alpha_slow`` / ``alpha_fast`` averages of the measurement
@@ -31,17 +31,17 @@ from dataclasses import replace
 import numpy as np
 
 from lrp_gym.config import LocalizationConfig, ScenarioError
-from lrp_gym.localization.estimate import PoseEstimate
-from lrp_gym.localization.estimators import (
+from lrp_gym.localization.kld import KldBinner, kld_particle_count
+from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.localization.particle_motion import odometry_noise, sample_motion
+from lrp_gym.localization.particle_statistics import (
     best_k_mean,
     circular_mean,
     cluster_labels,
     clusters,
     pose_covariance,
 )
-from lrp_gym.localization.kld import KldBinner, kld_particle_count
-from lrp_gym.localization.likelihood import FingerprintModel
-from lrp_gym.localization.motion import odometry_noise, sample_motion
+from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.localization.proposal import LostTest, MeasurementGrid
 from lrp_gym.localization.resampling import (
     effective_sample_size,

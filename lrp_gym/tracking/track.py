@@ -68,7 +68,7 @@ class Track:
         "hits",
         "age",
         "misses",
-        "confirmed",
+        "persistent",
         "fresh",
         "nis",
         "slot",
@@ -82,7 +82,7 @@ class Track:
         self.hits = 1  # bit i set: hit i frames ago
         self.age = 1
         self.misses = 0
-        self.confirmed = False  # passed M of N: a persistent return
+        self.persistent = False  # passed M of N (status "candidate" until reported as "confirmed")
         self.fresh = True
         self.nis = NIS_EXPECTED
         self.slot = -1  # reflector slot of its type while reported, else -1
@@ -96,7 +96,7 @@ class Track:
     def status(self) -> Literal["tentative", "candidate", "confirmed"]:
         if self.selected:
             return "confirmed"
-        return "candidate" if self.confirmed else "tentative"
+        return "candidate" if self.persistent else "tentative"
 
 
 def tracks_fingerprint(

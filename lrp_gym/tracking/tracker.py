@@ -4,7 +4,7 @@ One Kalman filter (:class:`filterpy.kalman.KalmanFilter`) per track, state
 ``(distance_m, rate_mps)``, measurement ``(range_m, velocity_mps)`` of a detection: the radar's
 radial velocity *is* the rate of the distance. Without odometry the prediction is the paper's
 linear motion model (next distance = distance + rate * dt); with it (:class:`EgoMotion`), each
-track is predicted as a static point at its type's height (:mod:`lrp_gym.tracking.motion`),
+track is predicted as a static point at its type's height (:mod:`lrp_gym.tracking.range_prediction`),
 an extended-Kalman step that is exact while the robot drives straight.
 
 Per frame (:meth:`LrpTracker.update`):
@@ -51,8 +51,8 @@ from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.classify import LrpClassifier, range_limits
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.identify import INFEASIBLE, POOL_FACTOR, ReflectorIdentifier
-from lrp_gym.tracking.motion import EgoMotion, predict_static
 from lrp_gym.tracking.prior import DistancePrior
+from lrp_gym.tracking.range_prediction import EgoMotion, predict_static
 from lrp_gym.tracking.track import Track, TrackView, tracks_fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.world import World
@@ -167,7 +167,7 @@ class LrpTracker:
             Time since the previous frame (> 0; ignored in the first frame).
         ego : EgoMotion, optional
             The robot's speed now and its odometry since the previous frame. With it, tracks
-            are predicted as static points (:mod:`lrp_gym.tracking.motion`), which is what
+            are predicted as static points (:mod:`lrp_gym.tracking.range_prediction`), which is what
             separates the reflectors from room returns, and detections faster than a
             reflector at their range can be are not taken. Without it, the constant-velocity
             model of the paper.
@@ -207,9 +207,9 @@ class LrpTracker:
         if self._tracks and len(detections):
             cost, ok, in_range_gate, d2 = self._gate(detections, z, cand, strict_all=static)
             explained = np.asarray(in_range_gate.any(axis=0))
-            confirmed = np.array([t.confirmed for t in self._tracks])
+            persistent = np.array([t.persistent for t in self._tracks])
             # Persistent returns choose first; tentative ones share what is left.
-            for rows in (np.flatnonzero(confirmed), np.flatnonzero(~confirmed)):
+            for rows in (np.flatnonzero(persistent), np.flatnonzero(~persistent)):
                 if len(rows) and free.any():
                     self._assign(rows, cost, ok & free[None, :], d2, detections, z, free)
         for t in self._tracks:
@@ -225,7 +225,7 @@ class LrpTracker:
         return ident.fingerprint(self._tracks, prior)
 
     def persistent_fingerprint(self, max_misses: int | None = None) -> Fingerprint:
-        """Every persistent (M-of-N confirmed) track, reported or not, per type.
+        """Every persistent track (passed M of N), reported or not, per type.
 
         More distances than reflectors: the ones a positioning method cannot explain are the
         room's returns. Unlike the gated detections, one-frame clutter is not in it, so a fit
@@ -238,7 +238,7 @@ class LrpTracker:
                 t
                 for t in self._tracks
                 if t.type_index == ty
-                and t.confirmed
+                and t.persistent
                 and (max_misses is None or t.misses <= max_misses)
             ]
             for ty in range(len(self.type_names))
@@ -344,7 +344,7 @@ class LrpTracker:
         x = np.array([t.kf.x[:, 0] for t in tracks])  # (n, 2) predicted state
         S = np.array([t.kf.P for t in tracks]) + self._R  # (n, 2, 2) innovation covariance
         types = np.array([t.type_index for t in tracks])
-        strict = np.array([strict_all or not t.confirmed for t in tracks])[:, None]
+        strict = np.array([strict_all or not t.persistent for t in tracks])[:, None]
         rcs = np.array([t.rcs_dbsm for t in tracks])[:, None]
         yr = z[None, :, 0] - x[:, 0, None]
         yv = z[None, :, 1] - x[:, 1, None]
