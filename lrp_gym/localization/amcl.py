@@ -201,9 +201,10 @@ class Amcl:
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
             if self.global_proposal:
-                self._grid_loglik = self.grid.log_likelihood(self.model, fingerprint)
+                grid_ll = self.grid.log_likelihood(self.model, fingerprint)
+                self._grid_loglik = grid_ll
                 if not self._pending_global:
-                    self._test_lost(fingerprint, w)
+                    self._test_lost(fingerprint, w, grid_ll)
             if self._pending_global:
                 w = self._global_start(fingerprint, rng, speed_mps)
             else:
@@ -261,13 +262,16 @@ class Amcl:
         log_w = (loglik - cell_ll[cells]) * self.cfg.likelihood_exponent
         return np.exp(log_w - np.max(log_w))
 
-    def _test_lost(self, fingerprint: Fingerprint, prior_weights: np.ndarray) -> None:
+    def _test_lost(
+        self, fingerprint: Fingerprint, prior_weights: np.ndarray, grid_loglik: np.ndarray
+    ) -> None:
         """Feed the lost test with this frame (heading-free, on a subsample of the predicted
-        cloud); a statistic far past the threshold restarts global localisation."""
+        cloud, against ``grid_loglik``, the frame's log-likelihood on the measurement grid); a
+        statistic far past the threshold restarts global localisation."""
         stride = max(1, len(prior_weights) // _FIT_SAMPLE)
         sub = self.particles[::stride, :2]
         cloud_ll = self.model.log_likelihood(sub, fingerprint)
-        self.lost.update(float(np.max(self._grid_loglik)), cloud_ll, prior_weights[::stride])
+        self.lost.update(float(np.max(grid_loglik)), cloud_ll, prior_weights[::stride])
         if self.lost.statistic_nats >= self.cfg.lost_restart_nats:
             self._pending_global = True
 
