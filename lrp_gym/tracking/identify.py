@@ -122,8 +122,8 @@ class ReflectorIdentifier:
         cost = np.repeat(base[:, None], cap, axis=1)
         feasible = np.ones(cost.shape, dtype=bool)
         if prior is not None:
-            d = np.array([t.kf.x[0, 0] for t in tracks])
-            var = np.array([t.kf.P[0, 0] for t in tracks]) + self.cfg.measurement_std_m**2
+            d = np.array([t.x[0] for t in tracks])
+            var = np.array([t.P[0, 0] for t in tracks]) + self.cfg.measurement_std_m**2
             llr = prior.log_density(ty, d, var) + self.log_window_m
             if prior.confident:
                 cost = cost - llr

@@ -1,6 +1,7 @@
 """Track the distances to the reflectors over radar frames and report the fingerprint.
 
-One Kalman filter (:class:`filterpy.kalman.KalmanFilter`) per track, state
+One Kalman filter per track (the equations in :mod:`lrp_gym.tracking.kalman`, for all tracks at
+once), state
 ``(distance_m, rate_mps)``, measurement ``(range_m, velocity_mps)`` of a detection: the radar's
 radial velocity *is* the rate of the distance. Without odometry the prediction is the paper's
 linear motion model (next distance = distance + rate * dt); with it (:class:`EgoMotion`), each
@@ -42,7 +43,6 @@ from __future__ import annotations
 
 import numpy as np
 from filterpy.common import Q_discrete_white_noise
-from filterpy.kalman import KalmanFilter
 from scipy.optimize import linear_sum_assignment
 from scipy.stats import chi2
 
@@ -51,6 +51,7 @@ from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.classify import LrpClassifier, range_limits
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.identify import INFEASIBLE, POOL_FACTOR, ReflectorIdentifier
+from lrp_gym.tracking.kalman import kalman_predict, kalman_update
 from lrp_gym.tracking.prior import DistancePrior
 from lrp_gym.tracking.range_prediction import EgoMotion, predict_static
 from lrp_gym.tracking.track import Track, TrackView, tracks_fingerprint
@@ -136,9 +137,9 @@ class LrpTracker:
                 track_id=t.track_id,
                 type_index=t.type_index,
                 type_name=self.type_names[t.type_index],
-                distance_m=float(t.kf.x[0, 0]),
-                rate_mps=float(t.kf.x[1, 0]),
-                variance_m2=float(t.kf.P[0, 0]),
+                distance_m=float(t.x[0]),
+                rate_mps=float(t.x[1]),
+                variance_m2=float(t.P[0, 0]),
                 rcs_dbsm=float(t.rcs_dbsm),
                 status=t.status,
                 age=t.age,
@@ -287,16 +288,17 @@ class LrpTracker:
         return model
 
     def _predict_cv(self, dt_s: float) -> None:
+        if not self._tracks:
+            return
         F, Q = self._model(dt_s, self.cfg.process_accel_std_mps2)
-        for t in self._tracks:
-            t.kf.predict(F=F, Q=Q)
+        x, P = kalman_predict(*self._stacked(self._tracks), F, Q)
+        self._unstack(self._tracks, x, P)
 
     def _predict_static(self, dt_s: float, ego: EgoMotion, prev_speed_mps: float) -> None:
         """Extended-Kalman prediction of every track as a static point of its type's height."""
         if not self._tracks:
             return
-        x = np.array([t.kf.x[:, 0] for t in self._tracks])  # (n, 2)
-        P = np.array([t.kf.P for t in self._tracks])  # (n, 2, 2)
+        x, P = self._stacked(self._tracks)
         h = self._height_m[[t.type_index for t in self._tracks]]
         prev = float(prev_speed_mps)
         # One call on the state and its two forward-difference neighbours (for the Jacobian).
@@ -311,9 +313,17 @@ class LrpTracker:
         P = J @ P @ J.transpose(0, 2, 1) + Q
         P[:, 0, 0] += var_r
         P[:, 1, 1] += var_v
-        for i, t in enumerate(self._tracks):
-            t.kf.x = np.array([[r[i]], [v[i]]])
-            t.kf.P = P[i]
+        self._unstack(self._tracks, np.column_stack([r, v]), P)
+
+    @staticmethod
+    def _stacked(tracks: list[Track]) -> tuple[np.ndarray, np.ndarray]:
+        """The tracks' states (n, 2) and covariances (n, 2, 2)."""
+        return np.array([t.x for t in tracks]), np.array([t.P for t in tracks])
+
+    @staticmethod
+    def _unstack(tracks: list[Track], x: np.ndarray, P: np.ndarray) -> None:
+        for t, xi, Pi in zip(tracks, x, P, strict=True):
+            t.x, t.P = xi, Pi
 
     def _doppler_ok(self, detections: Detections, speed_mps: float) -> np.ndarray:
         """Boolean (D, T): the radial velocity is one a static reflector of type t can have.
@@ -341,8 +351,8 @@ class LrpTracker:
         running RCS in units of half the RCS tolerance.
         """
         tracks = self._tracks
-        x = np.array([t.kf.x[:, 0] for t in tracks])  # (n, 2) predicted state
-        S = np.array([t.kf.P for t in tracks]) + self._R  # (n, 2, 2) innovation covariance
+        x, P = self._stacked(tracks)  # predicted states
+        S = P + self._R  # (n, 2, 2) innovation covariance
         types = np.array([t.type_index for t in tracks])
         strict = np.array([strict_all or not t.persistent for t in tracks])[:, None]
         rcs = np.array([t.rcs_dbsm for t in tracks])[:, None]
@@ -375,30 +385,13 @@ class LrpTracker:
         keep = sub_ok[r_idx, c_idx]
         r_idx, c_idx = r_idx[keep], c_idx[keep]
         tracks = [self._tracks[rows[r]] for r in r_idx]
-        self._batch_update(tracks, z[c_idx])
+        x, P = kalman_update(*self._stacked(tracks), z[c_idx], self._R)
+        self._unstack(tracks, x, P)
         for t, r, c in zip(tracks, rows[r_idx], c_idx, strict=True):
             t.rcs_dbsm += _RCS_SMOOTHING * (detections.rcs_dbsm[c] - t.rcs_dbsm)
             t.nis += _NIS_SMOOTHING * (min(d2[r, c], self._gate_2d) - t.nis)
             t.fresh = True
         free[c_idx] = False
-
-    def _batch_update(self, tracks: list[Track], z: np.ndarray) -> None:
-        """Kalman update of several tracks at once (H = I, Joseph form, as filterpy's update).
-
-        One vectorised pass over the assigned tracks costs about as much as a single
-        :meth:`KalmanFilter.update` call; the filters keep holding the state.
-        """
-        if not tracks:
-            return
-        x = np.array([t.kf.x[:, 0] for t in tracks])  # (m, 2)
-        P = np.array([t.kf.P for t in tracks])  # (m, 2, 2)
-        K = P @ np.linalg.inv(P + self._R)
-        x = x + np.einsum("mij,mj->mi", K, z - x)
-        I_K = np.eye(2) - K
-        P = I_K @ P @ I_K.transpose(0, 2, 1) + K @ self._R @ K.transpose(0, 2, 1)
-        for i, t in enumerate(tracks):
-            t.kf.x = x[i].reshape(2, 1)
-            t.kf.P = P[i]
 
     def _births(
         self,
@@ -419,10 +412,6 @@ class LrpTracker:
         fit = np.where(cand[idx], self.classifier.misfit(detections.rcs_dbsm[idx]), np.inf)
         best_type = np.argmin(fit, axis=1)
         for d, ty in zip(idx, best_type, strict=True):
-            kf = KalmanFilter(dim_x=2, dim_z=2)
-            kf.x = z[d].reshape(2, 1).copy()
-            kf.P = self._R.copy()
-            kf.H = np.eye(2)
-            kf.R = self._R
-            self._tracks.append(Track(self._next_id, int(ty), kf, float(detections.rcs_dbsm[d])))
+            rcs = float(detections.rcs_dbsm[d])
+            self._tracks.append(Track(self._next_id, int(ty), z[d].copy(), self._R.copy(), rcs))
             self._next_id += 1
