@@ -9,7 +9,18 @@ them against filterpy on the same inputs.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
+from filterpy.common import Q_discrete_white_noise
+
+
+@lru_cache(maxsize=64)
+def constant_velocity_model(dt_s: float, accel_std_mps2: float) -> tuple[np.ndarray, np.ndarray]:
+    """Transition ``F`` and process noise ``Q`` (white acceleration) over ``dt_s``; cached, so
+    treat them as read-only."""
+    F = np.array([[1.0, dt_s], [0.0, 1.0]])
+    return F, Q_discrete_white_noise(2, dt=dt_s, var=accel_std_mps2**2)
 
 
 def kalman_predict(

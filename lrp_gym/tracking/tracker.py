@@ -42,7 +42,6 @@ trust measured distances use :meth:`Fingerprint.fresh_only`.
 from __future__ import annotations
 
 import numpy as np
-from filterpy.common import Q_discrete_white_noise
 from scipy.optimize import linear_sum_assignment
 from scipy.stats import chi2
 
@@ -51,9 +50,9 @@ from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.classify import LrpClassifier, range_limits
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.identify import INFEASIBLE, POOL_FACTOR, ReflectorIdentifier
-from lrp_gym.tracking.kalman import kalman_predict, kalman_update
+from lrp_gym.tracking.kalman import constant_velocity_model, kalman_predict, kalman_update
 from lrp_gym.tracking.prior import DistancePrior
-from lrp_gym.tracking.range_prediction import EgoMotion, predict_static
+from lrp_gym.tracking.range_prediction import EgoMotion, ekf_predict_static, static_doppler_ok
 from lrp_gym.tracking.track import Track, TrackView, tracks_fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.world import World
@@ -110,7 +109,6 @@ class LrpTracker:
         self._gate_range = float(chi2.ppf(cfg.gate_probability, 1))
         self._gate_2d = float(chi2.ppf(cfg.gate_probability, 2))
         self._window_mask = (1 << cfg.confirm_window) - 1
-        self._model_cache: dict[tuple[float, float], tuple[np.ndarray, np.ndarray]] = {}
         self.reset()
 
     @classmethod
@@ -201,18 +199,20 @@ class LrpTracker:
 
         window = self.classifier.candidates(detections) if candidates is None else candidates
         self._gated = (detections, window)
-        cand = window if ego is None else window & self._doppler_ok(detections, ego.speed_mps)
+        cand = (
+            window
+            if ego is None
+            else window
+            & static_doppler_ok(
+                detections.range_m,
+                detections.velocity_mps,
+                self._min_height_m,
+                ego.speed_mps,
+                self.cfg.velocity_std_mps,
+            )
+        )
         z = np.column_stack([detections.range_m, detections.velocity_mps])
-        free = np.ones(len(detections), dtype=bool)
-        explained = np.zeros(len(detections), dtype=bool)
-        if self._tracks and len(detections):
-            cost, ok, in_range_gate, d2 = self._gate(detections, z, cand, strict_all=static)
-            explained = np.asarray(in_range_gate.any(axis=0))
-            persistent = np.array([t.persistent for t in self._tracks])
-            # Persistent returns choose first; tentative ones share what is left.
-            for rows in (np.flatnonzero(persistent), np.flatnonzero(~persistent)):
-                if len(rows) and free.any():
-                    self._assign(rows, cost, ok & free[None, :], d2, detections, z, free)
+        free, explained = self._associate(detections, z, cand, static)
         for t in self._tracks:
             t.age += 1
             t.hits = ((t.hits << 1) | int(t.fresh)) & self._window_mask
@@ -275,22 +275,10 @@ class LrpTracker:
         )
 
     # ------------------------------------------------------------------ prediction
-    def _model(self, dt_s: float, accel_std: float) -> tuple[np.ndarray, np.ndarray]:
-        """Transition and process noise of the constant-velocity model (cached per dt)."""
-        key = (dt_s, accel_std)
-        model = self._model_cache.get(key)
-        if model is None:
-            F = np.array([[1.0, dt_s], [0.0, 1.0]])
-            Q = Q_discrete_white_noise(2, dt=dt_s, var=accel_std**2)
-            model = (F, Q)
-            if len(self._model_cache) < 64:
-                self._model_cache[key] = model
-        return model
-
     def _predict_cv(self, dt_s: float) -> None:
         if not self._tracks:
             return
-        F, Q = self._model(dt_s, self.cfg.process_accel_std_mps2)
+        F, Q = constant_velocity_model(dt_s, self.cfg.process_accel_std_mps2)
         x, P = kalman_predict(*self._stacked(self._tracks), F, Q)
         self._unstack(self._tracks, x, P)
 
@@ -300,20 +288,9 @@ class LrpTracker:
             return
         x, P = self._stacked(self._tracks)
         h = self._height_m[[t.type_index for t in self._tracks]]
-        prev = float(prev_speed_mps)
-        # One call on the state and its two forward-difference neighbours (for the Jacobian).
-        n, eps = len(x), 1e-4
-        xs = np.concatenate([x, x + [eps, 0.0], x + [0.0, eps]])
-        r, v, var_r, var_v = predict_static(xs[:, 0], xs[:, 1], np.tile(h, 3), prev, ego)
-        J = np.empty((n, 2, 2))
-        J[:, 0, 0], J[:, 0, 1] = (r[n : 2 * n] - r[:n]) / eps, (r[2 * n :] - r[:n]) / eps
-        J[:, 1, 0], J[:, 1, 1] = (v[n : 2 * n] - v[:n]) / eps, (v[2 * n :] - v[:n]) / eps
-        r, v, var_r, var_v = r[:n], v[:n], var_r[:n], var_v[:n]
-        _, Q = self._model(dt_s, self.cfg.ego_accel_std_mps2)
-        P = J @ P @ J.transpose(0, 2, 1) + Q
-        P[:, 0, 0] += var_r
-        P[:, 1, 1] += var_v
-        self._unstack(self._tracks, np.column_stack([r, v]), P)
+        _, Q = constant_velocity_model(dt_s, self.cfg.ego_accel_std_mps2)
+        x, P = ekf_predict_static(x, P, h, float(prev_speed_mps), ego, Q)
+        self._unstack(self._tracks, x, P)
 
     @staticmethod
     def _stacked(tracks: list[Track]) -> tuple[np.ndarray, np.ndarray]:
@@ -325,18 +302,22 @@ class LrpTracker:
         for t, xi, Pi in zip(tracks, x, P, strict=True):
             t.x, t.P = xi, Pi
 
-    def _doppler_ok(self, detections: Detections, speed_mps: float) -> np.ndarray:
-        """Boolean (D, T): the radial velocity is one a static reflector of type t can have.
-
-        A point ``dz`` above the radar at range ``r`` closes at most at
-        ``|u| * sqrt(1 - dz**2 / r**2)``; a wall approached head-on closes at the full speed.
-        """
-        r = np.maximum(detections.range_m[:, None], 1e-6)
-        cos_elev = np.sqrt(np.maximum(1.0 - (self._min_height_m[None, :] / r) ** 2, 0.0))
-        limit = abs(speed_mps) * cos_elev + 3.0 * self.cfg.velocity_std_mps
-        return np.abs(detections.velocity_mps[:, None]) <= limit
-
     # ------------------------------------------------------------------ association
+    def _associate(
+        self, detections: Detections, z: np.ndarray, cand: np.ndarray, static: bool
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Gate and assign this frame's detections; return the (free, explained) masks (D,)."""
+        free = np.ones(len(detections), dtype=bool)
+        if not (self._tracks and len(detections)):
+            return free, np.zeros(len(detections), dtype=bool)
+        cost, ok, in_range_gate, d2 = self._gate(detections, z, cand, strict_all=static)
+        persistent = np.array([t.persistent for t in self._tracks])
+        # Persistent returns choose first; tentative ones share what is left.
+        for rows in (np.flatnonzero(persistent), np.flatnonzero(~persistent)):
+            if len(rows) and free.any():
+                self._assign(rows, cost, ok & free[None, :], d2, detections, z, free)
+        return free, np.asarray(in_range_gate.any(axis=0))
+
     def _gate(
         self, detections: Detections, z: np.ndarray, cand: np.ndarray, *, strict_all: bool
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
