@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from agents.evaluate import load_ppo
+from agents.registry import load_ppo
 from lrp_gym.errors import InputError
 from lrp_gym.experiments.episodes import make_eval_env, public, run_episodes
 from lrp_gym.output import save_figure

@@ -71,7 +71,7 @@ def ambiguity(
     result = analyse_scenario(cfg, grid_m)
     summary = result.summary() | {"elapsed_s": time.perf_counter() - start}
     if plot_path is not None:
-        from lrp_gym.placement.plot import plot_scenario_map
+        from lrp_gym.placement.plotting import plot_scenario_map
 
         save_figure(plot_scenario_map(cfg, result), plot_path)
         summary["plot"] = str(plot_path)

@@ -114,7 +114,7 @@ def evaluate(
     gif_path = check_output(gif, "--gif", force, (".gif",))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
     check_distinct(out_path, gif_path, plot_path)
-    from agents import evaluate as ev
+    from agents import registry as ev
     from lrp_gym.config import deep_merge
     from lrp_gym.experiments import episodes as ep
 

@@ -122,7 +122,7 @@ def radar_rate(
 ) -> None:
     """How often the radar delivers each LRP: detected within 10 cm with an RCS inside the
     tracker's window, per LRP and in total."""
-    from lrp_gym.radar.evaluate import lrp_detection_rate
+    from lrp_gym.radar.delivery_rate import lrp_detection_rate
 
     if poses < 1:
         raise InputError(f"--poses: must be at least 1, got {poses}")

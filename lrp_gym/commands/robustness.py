@@ -129,7 +129,7 @@ def _run(rb, agent, env, names, sev, episodes, seed, task, model, scenario, quie
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from agents.evaluate import make_agent
+    from agents.registry import make_agent
 
     total = episodes * (1 + len(names) * len(sev))
     with Progress(

@@ -18,9 +18,9 @@ from gymnasium.error import ResetNeeded
 from lrp_gym.config import ScenarioConfig, load_scenario
 from lrp_gym.envs.observations import NavSnapshot, make_observation
 from lrp_gym.envs.task import WaypointPath, sample_goal_task
-from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.localization.factory import Localizer
 from lrp_gym.localization.lut import LookupTable
+from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.localization.stack import FrameResult, LocalizationStack
 from lrp_gym.perturbations import FrameContext, PerturbationSet
 from lrp_gym.radar.detections import Detections
@@ -210,22 +210,21 @@ class LRPRadarNavEnv(gym.Env):
         task = self.cfg.task
         if task.mode == "path":
             self.pose = np.asarray(self.cfg.robot.start_pose, dtype=float)
-            self.path = WaypointPath.from_points(np.asarray(task.path))
+            path = WaypointPath.from_points(np.asarray(task.path))
         else:
-            self.pose, self.path = sample_goal_task(
-                self.world.room, task, self._radius_m + 0.1, rng
-            )
+            self.pose, path = sample_goal_task(self.world.room, task, self._radius_m + 0.1, rng)
+        self.path = path
         self._last_action = np.zeros(2)
         self._steps = 0
         self._done = False
         known = self.pose if self.cfg.localization.init == "gaussian" else None
         self.stack.reset(rng, known)
-        self._s_true = self.path.project(self.pose[:2])
+        self._s_true = path.project(self.pose[:2])
         if self.perturbations is not None:
             # The radar may see another layout than the surveyed one the localiser uses.
             self.stack.set_radar_layout(self.perturbations.reset(self._frame_context(), rng))
         self._sense(np.zeros(3), np.zeros(2))
-        self._s_est = self.path.project(self.estimate.pose[:2])
+        self._s_est = path.project(self._estimate_now().pose[:2])
         return self._observe(), self._info(collided=False, reached=False, rewards=None)
 
     def step(self, action):
@@ -298,19 +297,23 @@ class LRPRadarNavEnv(gym.Env):
     def _goal_reached(self) -> bool:
         """Within tolerance of the goal, having come along the path, not cut across to it."""
         tol = self.cfg.task.goal_tolerance_m
+        path = self._episode_path()
         return bool(
-            np.linalg.norm(self.pose[:2] - self.path.goal_m) <= tol
-            and self._s_true >= self.path.length_m - 2.0 * tol
+            np.linalg.norm(self.pose[:2] - path.goal_m) <= tol
+            and self._s_true >= path.length_m - 2.0 * tol
         )
 
     def _update_progress(self) -> float:
         """Project the true and estimated poses on the path; return the true progress made."""
         s_prev = self._s_true
-        self._s_true = self.path.project(
+        path = self._episode_path()
+        self._s_true = path.project(
             self.pose[:2], max(s_prev - _PROGRESS_BACK_M, 0.0), _PROGRESS_WINDOW_M
         )
-        self._s_est = self.path.project(
-            self.estimate.pose[:2], max(self._s_est - _PROGRESS_BACK_M, 0.0), _PROGRESS_WINDOW_M
+        self._s_est = path.project(
+            self._estimate_now().pose[:2],
+            max(self._s_est - _PROGRESS_BACK_M, 0.0),
+            _PROGRESS_WINDOW_M,
         )
         return self._s_true - s_prev
 
@@ -359,13 +362,24 @@ class LRPRadarNavEnv(gym.Env):
             self._steps, self.pose, self.world, sensor.world.layout, self.dt_s, sensor
         )
 
+    def _episode_path(self) -> WaypointPath:
+        if self.path is None:
+            raise ResetNeeded("call reset() first: the env has no episode yet")
+        return self.path
+
+    def _estimate_now(self) -> PoseEstimate:
+        if self.estimate is None:
+            raise ResetNeeded("call reset() first: the env has no pose estimate yet")
+        return self.estimate
+
     def _snapshot(self) -> NavSnapshot:
+        est = self._estimate_now()
         return NavSnapshot(
-            est_pose=self.estimate.pose,
-            est_std=self.estimate.std,
-            converged=self.estimate.converged,
+            est_pose=est.pose,
+            est_std=est.std,
+            converged=est.converged,
             true_pose=self.pose,
-            path=self.path,
+            path=self._episode_path(),
             s_est_m=self._s_est,
             s_true_m=self._s_true,
             last_action=self._last_action,
@@ -376,22 +390,22 @@ class LRPRadarNavEnv(gym.Env):
         return self._obs_type.observe(self._snapshot())
 
     def _info(self, *, collided: bool, reached: bool, rewards: dict | None) -> dict[str, Any]:
-        est = self.estimate
+        est = self._estimate_now()
         err = est.pose[:2] - self.pose[:2]
         return {
             "true_pose": self.pose.copy(),
             "est_pose": est.pose.copy(),
             "position_error_m": float(np.hypot(*err)),
-            "heading_error_rad": float(abs(wrap_angle(est.pose[2] - self.pose[2]))),
+            "heading_error_rad": float(np.abs(wrap_angle(est.pose[2] - self.pose[2]))),
             "pose_std": est.std,
             "n_particles": int(est.n_particles),
             "ess": float(est.ess),
-            "n_detections": len(self.detections),
+            "n_detections": 0 if self.detections is None else len(self.detections),
             "converged": bool(est.converged),
             "localization_confidence": float(est.confidence),
             "n_modes": int(est.n_modes),
             "progress_m": self._s_true,
-            "path_length_m": self.path.length_m,
+            "path_length_m": self._episode_path().length_m,
             "collision": collided,
             "is_success": reached,
             "rewards": rewards or {"progress": 0.0, "time": 0.0, "collision": 0.0, "goal": 0.0},

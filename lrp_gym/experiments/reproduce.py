@@ -29,7 +29,7 @@ from lrp_gym.localization.stack import FrameResult, LocalizationStack
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
-from lrp_gym.tracking.motion import EgoMotion
+from lrp_gym.tracking.range_prediction import EgoMotion
 from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world.robot import noisy_odometry
 from lrp_gym.world.trajectory import Trajectory, path_trajectory
@@ -219,7 +219,7 @@ def _run(bench: _Bench, rng: np.random.Generator) -> _RunErrors:
         out.timing_s["tracking_amcl"] += res.elapsed_s["tracking_localization"]
         out.timing_s["lut"] += res.elapsed_s["lut"]
         _record(out, i, pose, res)
-        if len(stacks) > 1:
+        if out.grid is not None:  # with_grid: the second stack is the grid filter
             # Draws nothing from rng: AMCL's numbers are those of a run without it.
             grid = stacks[1].localize(frame, ego, rng)
             out.timing_s["tracking_grid"] += grid.elapsed_s["tracking_localization"]
@@ -235,8 +235,10 @@ def _timing_keys(with_grid: bool) -> tuple[str, ...]:
 
 def _record(out: _RunErrors, i: int, pose: np.ndarray, res: FrameResult) -> None:
     """The table's and AMCL's position errors at frame ``i``."""
-    est = res.localizer_estimate
-    out.lut[i] = np.hypot(*(res.lut_estimate.pose[:2] - pose[:2]))
+    est, lut = res.localizer_estimate, res.lut_estimate
+    if lut is None:
+        raise RuntimeError("the first stack of reproduce-paper always has the look-up table")
+    out.lut[i] = np.hypot(*(lut.pose[:2] - pose[:2]))
     out.amcl[i] = np.hypot(*(est.pose[:2] - pose[:2]))
     out.particles[i] = est.n_particles
 
@@ -307,7 +309,8 @@ def _reproduction(
         for key in _timing_keys(bench.with_grid)
     }
     frame_ms["total"] = sum(frame_ms.values())
-    grid = np.stack([r.grid for r in results]) if bench.with_grid else None
+    grids = [r.grid for r in results if r.grid is not None]
+    grid = np.stack(grids) if bench.with_grid else None
     cfg, loc, lut = bench.cfg, bench.loc, bench.lut
     return Reproduction(
         np.stack([r.lut for r in results]),

@@ -22,7 +22,7 @@ import numpy as np
 
 from lrp_gym.config import PerturbationsConfig, deep_merge
 from lrp_gym.experiments.episodes import Policy, make_eval_env, nav_env, run_episode, summarize
-from lrp_gym.perturbations.motion import Kidnapping
+from lrp_gym.perturbations.robot_motion import Kidnapping
 
 LOCALISED_M = 0.2
 RECOVERY_BUDGET_FRAMES = 15

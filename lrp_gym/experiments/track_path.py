@@ -12,7 +12,7 @@ from lrp_gym.localization.stack import LocalizationStack
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.metrics import SwapCounter, per_type_errors_m
-from lrp_gym.tracking.motion import EgoMotion
+from lrp_gym.tracking.range_prediction import EgoMotion
 from lrp_gym.world.robot import noisy_odometry
 from lrp_gym.world.trajectory import Trajectory, path_trajectory
 from lrp_gym.world.world import World
@@ -90,7 +90,7 @@ def run_path(
     AMCL runs alongside, as in the env (one :class:`~lrp_gym.localization.stack.LocalizationStack`).
     With ``use_prior`` its prediction identifies the reflectors (:mod:`lrp_gym.tracking.prior`);
     with ``use_ego`` the tracker gets the robot's (noisy) odometry and predicts static points
-    (:mod:`lrp_gym.tracking.motion`), else the paper's constant-velocity model.
+    (:mod:`lrp_gym.tracking.range_prediction`), else the paper's constant-velocity model.
     """
     if len(cfg.task.path) < 2:
         raise ValueError("task.path needs at least two waypoints")

@@ -3,11 +3,11 @@
 One :meth:`Amcl.update` per radar frame:
 
 1. *predict*: every particle moves by the odometry (rot1, trans, rot2) with its own sampled
-   noise (:mod:`~lrp_gym.localization.motion`); particles that leave the free space (room and
+   noise (:mod:`~lrp_gym.localization.particle_motion`); particles that leave the free space (room and
    obstacles grown by the robot radius) get weight zero;
 2. *weight*: multiply by the likelihood of the fingerprint (:mod:`~lrp_gym.localization.likelihood`);
 3. *estimate*: the paper's best-k rule or the heaviest cluster
-   (:mod:`~lrp_gym.localization.estimators`), with a 3x3 covariance about the estimate;
+   (:mod:`~lrp_gym.localization.particle_statistics`), with a 3x3 covariance about the estimate;
 4. *resample* when the effective sample size falls below ``resample_ess_ratio * N``:
    low-variance resampling to a KLD-sampling particle count, with a share of uniformly drawn
    particles given by the ``alpha_slow`` / ``alpha_fast`` averages of the measurement
@@ -31,17 +31,17 @@ from dataclasses import replace
 import numpy as np
 
 from lrp_gym.config import LocalizationConfig, ScenarioError
-from lrp_gym.localization.estimate import PoseEstimate
-from lrp_gym.localization.estimators import (
+from lrp_gym.localization.kld import KldBinner, kld_particle_count
+from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.localization.particle_motion import odometry_noise, sample_motion
+from lrp_gym.localization.particle_statistics import (
     best_k_mean,
     circular_mean,
     cluster_labels,
     clusters,
     pose_covariance,
 )
-from lrp_gym.localization.kld import KldBinner, kld_particle_count
-from lrp_gym.localization.likelihood import FingerprintModel
-from lrp_gym.localization.motion import odometry_noise, sample_motion
+from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.localization.proposal import LostTest, MeasurementGrid
 from lrp_gym.localization.resampling import (
     effective_sample_size,
@@ -201,9 +201,10 @@ class Amcl:
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
             if self.global_proposal:
-                self._grid_loglik = self.grid.log_likelihood(self.model, fingerprint)
+                grid_ll = self.grid.log_likelihood(self.model, fingerprint)
+                self._grid_loglik = grid_ll
                 if not self._pending_global:
-                    self._test_lost(fingerprint, w)
+                    self._test_lost(fingerprint, w, grid_ll)
             if self._pending_global:
                 w = self._global_start(fingerprint, rng, speed_mps)
             else:
@@ -261,13 +262,16 @@ class Amcl:
         log_w = (loglik - cell_ll[cells]) * self.cfg.likelihood_exponent
         return np.exp(log_w - np.max(log_w))
 
-    def _test_lost(self, fingerprint: Fingerprint, prior_weights: np.ndarray) -> None:
+    def _test_lost(
+        self, fingerprint: Fingerprint, prior_weights: np.ndarray, grid_loglik: np.ndarray
+    ) -> None:
         """Feed the lost test with this frame (heading-free, on a subsample of the predicted
-        cloud); a statistic far past the threshold restarts global localisation."""
+        cloud, against ``grid_loglik``, the frame's log-likelihood on the measurement grid); a
+        statistic far past the threshold restarts global localisation."""
         stride = max(1, len(prior_weights) // _FIT_SAMPLE)
         sub = self.particles[::stride, :2]
         cloud_ll = self.model.log_likelihood(sub, fingerprint)
-        self.lost.update(float(np.max(self._grid_loglik)), cloud_ll, prior_weights[::stride])
+        self.lost.update(float(np.max(grid_loglik)), cloud_ll, prior_weights[::stride])
         if self.lost.statistic_nats >= self.cfg.lost_restart_nats:
             self._pending_global = True
 

@@ -31,12 +31,6 @@ import numpy as np
 from scipy.special import ndtr
 
 from lrp_gym.config import LocalizationConfig
-from lrp_gym.localization.estimate import PoseEstimate
-from lrp_gym.localization.estimators import (
-    best_k_mean,
-    circular_variance_rad2,
-    clusters,
-)
 from lrp_gym.localization.grid_motion import (
     convolve_heading,
     convolve_xy,
@@ -44,7 +38,13 @@ from lrp_gym.localization.grid_motion import (
     translation_kernels,
 )
 from lrp_gym.localization.likelihood import FingerprintModel
-from lrp_gym.localization.motion import odometry_noise, wrap_fast
+from lrp_gym.localization.particle_motion import odometry_noise, wrap_fast
+from lrp_gym.localization.particle_statistics import (
+    best_k_mean,
+    circular_variance_rad2,
+    clusters,
+)
+from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
 
@@ -252,7 +252,7 @@ class GridFilter:
         """The pose estimate of the current posterior (no update).
 
         The cells are AMCL's particles here: the heaviest cluster of
-        :func:`~lrp_gym.localization.estimators.dominant_cluster` (bins of ``kld_bin_m``)
+        :func:`~lrp_gym.localization.particle_statistics.dominant_cluster` (bins of ``kld_bin_m``)
         gives the estimate (``estimator: cluster``; its heading is the circular mean of the
         cluster's heading mass) and decides ``converged`` with AMCL's rule. ``best_k`` averages
         the heaviest xy cells near the heaviest one. ``n_particles`` counts the cells of

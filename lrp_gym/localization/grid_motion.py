@@ -1,7 +1,7 @@
 """AMCL's odometry motion model on a histogram over (heading, x, y).
 
 A particle moves by the noisy odometry ``(rot1 + e1, trans + e2, rot2 + e3)`` with
-``e ~ N(0, diag(OdometryNoise.std(odometry)^2))`` (:func:`~lrp_gym.localization.motion.sample_motion`).
+``e ~ N(0, diag(OdometryNoise.std(odometry)^2))`` (:func:`~lrp_gym.localization.particle_motion.sample_motion`).
 On a grid the same model is two convolutions:
 
 1. *translation*, per heading slice ``th_k``: the displacement

@@ -177,7 +177,9 @@ class FingerprintModel:
                 f"{self.structure_probability} + {self.ghost_probability}"
             )
         self.ghosts = (
-            GhostModel(room, layout, mount_height_m) if self.ghost_probability > 0.0 else None
+            GhostModel(room, layout, mount_height_m)
+            if room is not None and self.ghost_probability > 0.0
+            else None
         )
         self.type_names = layout.type_names
         self._xy = []
@@ -289,13 +291,14 @@ class FingerprintModel:
         """Ranges (K, N) of the non-reflector returns that the map predicts (room structure,
         then reflector ghosts) and their radial velocities (K, N) given ``velocity_xy``."""
         ranges, rates = [], []
-        if self.structure_probability > 0.0:
-            ranges.append(structure_ranges_m(self.room, self.mount_height_m, xy).astype(dtype))
+        room = self.room  # not None when structure_probability > 0 (see __init__)
+        if room is not None and self.structure_probability > 0.0:
+            ranges.append(structure_ranges_m(room, self.mount_height_m, xy).astype(dtype))
             if velocity_xy is not None:
                 rates.append(
-                    structure_velocities_mps(
-                        self.room, self.mount_height_m, xy, velocity_xy
-                    ).astype(dtype)
+                    structure_velocities_mps(room, self.mount_height_m, xy, velocity_xy).astype(
+                        dtype
+                    )
                 )
         if self.ghosts is not None:
             g, gv = self.ghosts.ranges(xy, velocity_xy, dtype)
@@ -331,13 +334,14 @@ class FingerprintModel:
         s_prob = self.structure_probability
         gh_prob = self.ghost_probability
         extra_w = self._map_return_weights(dtype)
-        doppler = (
-            self.doppler_std_mps > 0.0
-            and velocity_xy is not None
-            and fingerprint.velocities_mps is not None
-        )
-        velocities = (
-            fingerprint.velocities_mps if doppler else (None,) * len(fingerprint.type_names)
+        measured_v = fingerprint.velocities_mps
+        # The robot's velocity when the Doppler term applies, else None.
+        doppler_xy = velocity_xy if self.doppler_std_mps > 0.0 and measured_v is not None else None
+        doppler = doppler_xy is not None
+        velocities: tuple[np.ndarray | None, ...] = (
+            measured_v
+            if doppler and measured_v is not None
+            else (None,) * len(fingerprint.type_names)
         )
         clutter_density = self.clutter_density * (self.velocity_density if doppler else 1.0)
         for name, z, var, vel in zip(
@@ -354,8 +358,8 @@ class FingerprintModel:
             if m == 0:
                 continue
             if expected is None:
-                if doppler:
-                    expected, expected_v = self.expected_with_velocity(xy, velocity_xy, dtype)
+                if doppler_xy is not None:
+                    expected, expected_v = self.expected_with_velocity(xy, doppler_xy, dtype)
                 else:
                     expected = self.expected(xy, dtype)
             e = expected[t]  # (m, N), sorted along axis 0
@@ -401,7 +405,7 @@ class FingerprintModel:
             g = r.mean(axis=1)  # (n, N)
             if extra_w is not None:
                 if extra is None:
-                    extra, extra_v = self._map_returns(xy, velocity_xy if doppler else None, dtype)
+                    extra, extra_v = self._map_returns(xy, doppler_xy, dtype)
                 g *= dtype(1.0 - s_prob - gh_prob)
                 g += map_return_density(
                     z,

@@ -37,7 +37,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from lrp_gym.localization.estimate import PoseEstimate
+from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
 

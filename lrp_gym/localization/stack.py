@@ -27,14 +27,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from lrp_gym.config import ScenarioConfig
-from lrp_gym.localization.estimate import PoseEstimate
 from lrp_gym.localization.factory import Localizer, make_localizer
 from lrp_gym.localization.lut import LookupTable
+from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
-from lrp_gym.tracking.motion import EgoMotion
 from lrp_gym.tracking.prior import DistancePrior
+from lrp_gym.tracking.range_prediction import EgoMotion
 from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.robot import apply_odometry

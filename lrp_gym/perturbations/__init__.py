@@ -20,7 +20,7 @@ name                     effect                                                 
 =======================  ==========================================================  =========
 """
 
-from lrp_gym.perturbations import layout, motion, sensing  # noqa: F401  (registers the classes)
+from lrp_gym.perturbations import layout, robot_motion, sensing  # noqa: F401  (registers the classes)
 from lrp_gym.perturbations.base import REGISTRY, FrameContext, Perturbation, register
 from lrp_gym.perturbations.composite import PerturbationSet
 

@@ -4,7 +4,7 @@
 noise, at a sweep of peak SNRs (clean peak power over one cell's noise, the SNR the fast model
 uses), runs the signal chain (cube, FFT, CFAR, interpolation) and fits the interpolation error
 ``std(error_bins) = K / sqrt(2 SNR)`` per axis. It prints the fitted constants (commit them to
-:mod:`lrp_gym.radar.fast`) and, per SNR, the detection probability of both fidelities.
+:mod:`lrp_gym.radar.detection_model`) and, per SNR, the detection probability of both fidelities.
 """
 
 from __future__ import annotations

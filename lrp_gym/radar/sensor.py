@@ -4,7 +4,7 @@ Two fidelities (``radar.fidelity``):
 
 - ``signal``: channel paths -> beat-signal cube with thermal noise -> window, 2-D FFT -> CFAR ->
   peak interpolation -> range, velocity, power, RCS, SNR.
-- ``detections``: detections drawn straight from the paths by :mod:`lrp_gym.radar.fast`, with
+- ``detections``: detections drawn straight from the paths by :mod:`lrp_gym.radar.detection_model`, with
   the resolution, interpolation error and detection probability of the signal model.
 """
 
@@ -18,8 +18,8 @@ from lrp_gym.config import RadarConfig
 from lrp_gym.radar.antenna import ZenithPattern
 from lrp_gym.radar.cfar import Cfar2D
 from lrp_gym.radar.channel import Channel, Paths
+from lrp_gym.radar.detection_model import FastDetectionModel
 from lrp_gym.radar.detections import Detections
-from lrp_gym.radar.fast import FastDetectionModel
 from lrp_gym.radar.frontend import beat_cube, link_constant_w_m2, noise_power_w
 from lrp_gym.radar.processing import RangeDopplerProcessor
 from lrp_gym.world.world import World

@@ -2,8 +2,8 @@
 
 from lrp_gym.tracking.classify import LrpClassifier, range_limits
 from lrp_gym.tracking.fingerprint import Fingerprint
-from lrp_gym.tracking.motion import EgoMotion
 from lrp_gym.tracking.prior import DistancePrior
+from lrp_gym.tracking.range_prediction import EgoMotion
 from lrp_gym.tracking.tracker import LrpTracker, TrackView
 
 __all__ = [

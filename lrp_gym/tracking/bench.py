@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 
 from lrp_gym.config import ScenarioConfig
-from lrp_gym.tracking.motion import EgoMotion
 from lrp_gym.tracking.prior import DistancePrior
+from lrp_gym.tracking.range_prediction import EgoMotion
 from lrp_gym.tracking.synthetic import synthetic_stream
 from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world.robot import odometry_delta

@@ -67,7 +67,7 @@ class ReflectorIdentifier:
         )
         excess_nis = max(t.nis - NIS_EXPECTED, 0.0) / NIS_EXPECTED
         # Age weighs as much as the hit rate: an established track is not pushed out by a
-        # newly confirmed one while it merely coasts through a few missed detections.
+        # newly persistent one while it merely coasts through a few missed detections.
         return (
             hit_rate
             + min(t.age, 20) / 20.0
@@ -77,7 +77,7 @@ class ReflectorIdentifier:
         )
 
     def prune(self, tracks: list[Track], pool_factor: int) -> list[Track]:
-        """M-of-N confirmation, deletion, and a bounded pool of tracks per type.
+        """M-of-N persistence, deletion, and a bounded pool of tracks per type.
 
         ``pool_factor`` times as many persistent returns as reflectors are kept: the tracker
         passes ``POOL_FACTOR`` with a confident prior to choose among them, else 1 (the
@@ -86,17 +86,17 @@ class ReflectorIdentifier:
         cfg = self.cfg
         kept: list[Track] = []
         for t in tracks:
-            if not t.confirmed and bin(t.hits).count("1") >= cfg.confirm_hits:
-                t.confirmed = True
-            if t.confirmed and t.misses > cfg.max_coast_frames:
+            if not t.persistent and bin(t.hits).count("1") >= cfg.confirm_hits:
+                t.persistent = True
+            if t.persistent and t.misses > cfg.max_coast_frames:
                 continue
-            if not t.confirmed and t.age >= cfg.confirm_window:
+            if not t.persistent and t.age >= cfg.confirm_window:
                 continue  # could not collect its hits within the window
             kept.append(t)
         final: list[Track] = []
         for ty, cap in enumerate(self.capacity):
-            for confirmed in (True, False):
-                same = [t for t in kept if t.type_index == ty and t.confirmed == confirmed]
+            for persistent in (True, False):
+                same = [t for t in kept if t.type_index == ty and t.persistent == persistent]
                 if len(same) > pool_factor * cap:
                     same = sorted(same, key=lambda t: (-self.score(t), t.track_id))
                     same = same[: pool_factor * cap]
@@ -122,8 +122,8 @@ class ReflectorIdentifier:
         cost = np.repeat(base[:, None], cap, axis=1)
         feasible = np.ones(cost.shape, dtype=bool)
         if prior is not None:
-            d = np.array([t.kf.x[0, 0] for t in tracks])
-            var = np.array([t.kf.P[0, 0] for t in tracks]) + self.cfg.measurement_std_m**2
+            d = np.array([t.x[0] for t in tracks])
+            var = np.array([t.P[0, 0] for t in tracks]) + self.cfg.measurement_std_m**2
             llr = prior.log_density(ty, d, var) + self.log_window_m
             if prior.confident:
                 cost = cost - llr
@@ -146,7 +146,7 @@ class ReflectorIdentifier:
     def select(self, tracks: list[Track], prior: DistancePrior | None) -> None:
         """Mark, per type, the persistent tracks most like its reflectors as reported."""
         for ty, cap in enumerate(self.capacity):
-            pool = [t for t in tracks if t.type_index == ty and t.confirmed]
+            pool = [t for t in tracks if t.type_index == ty and t.persistent]
             pairs = self._match_slots(pool, ty, prior, np.arange(cap))
             chosen = {id(t): slot for t, slot in pairs}
             for t in pool:
@@ -161,7 +161,7 @@ class ReflectorIdentifier:
             if len(sel) < cap:
                 # Free slots: tentative tracks, flagged not fresh. With a prior, the free slots
                 # are the reflectors no reported track matches.
-                tent = [t for t in tracks if t.type_index == ty and not t.confirmed]
+                tent = [t for t in tracks if t.type_index == ty and not t.persistent]
                 free = np.arange(cap - len(sel))
                 if prior is not None:
                     taken = {t.slot for t in sel}

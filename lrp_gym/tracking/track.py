@@ -6,7 +6,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from filterpy.kalman import KalmanFilter
 
 from lrp_gym.tracking.fingerprint import Fingerprint
 
@@ -63,26 +62,30 @@ class Track:
     __slots__ = (
         "track_id",
         "type_index",
-        "kf",
+        "x",
+        "P",
         "rcs_dbsm",
         "hits",
         "age",
         "misses",
-        "confirmed",
+        "persistent",
         "fresh",
         "nis",
         "slot",
     )
 
-    def __init__(self, track_id: int, type_index: int, kf: KalmanFilter, rcs_dbsm: float) -> None:
+    def __init__(
+        self, track_id: int, type_index: int, x: np.ndarray, P: np.ndarray, rcs_dbsm: float
+    ) -> None:
         self.track_id = track_id
         self.type_index = type_index
-        self.kf = kf
+        self.x = x  # (2,) distance_m, rate_mps
+        self.P = P  # (2, 2) its covariance
         self.rcs_dbsm = rcs_dbsm
         self.hits = 1  # bit i set: hit i frames ago
         self.age = 1
         self.misses = 0
-        self.confirmed = False  # passed M of N: a persistent return
+        self.persistent = False  # passed M of N (status "candidate" until reported as "confirmed")
         self.fresh = True
         self.nis = NIS_EXPECTED
         self.slot = -1  # reflector slot of its type while reported, else -1
@@ -96,7 +99,7 @@ class Track:
     def status(self) -> Literal["tentative", "candidate", "confirmed"]:
         if self.selected:
             return "confirmed"
-        return "candidate" if self.confirmed else "tentative"
+        return "candidate" if self.persistent else "tentative"
 
 
 def tracks_fingerprint(
@@ -105,9 +108,9 @@ def tracks_fingerprint(
     """The fingerprint of given tracks per type: filtered distances, variances, fresh flags."""
     dists, variances, fresh = [], [], []
     for tracks, flags in zip(tracks_by_type, fresh_by_type, strict=True):
-        d = np.array([t.kf.x[0, 0] for t in tracks], dtype=float)
+        d = np.array([t.x[0] for t in tracks], dtype=float)
         order = np.argsort(d, kind="stable")
         dists.append(d[order])
-        variances.append(np.array([t.kf.P[0, 0] for t in tracks], dtype=float)[order])
+        variances.append(np.array([t.P[0, 0] for t in tracks], dtype=float)[order])
         fresh.append(np.array(flags, dtype=bool)[order])
     return Fingerprint(type_names, tuple(dists), tuple(variances), tuple(fresh))

@@ -1,10 +1,11 @@
 """Track the distances to the reflectors over radar frames and report the fingerprint.
 
-One Kalman filter (:class:`filterpy.kalman.KalmanFilter`) per track, state
+One Kalman filter per track (the equations in :mod:`lrp_gym.tracking.kalman`, for all tracks at
+once), state
 ``(distance_m, rate_mps)``, measurement ``(range_m, velocity_mps)`` of a detection: the radar's
 radial velocity *is* the rate of the distance. Without odometry the prediction is the paper's
 linear motion model (next distance = distance + rate * dt); with it (:class:`EgoMotion`), each
-track is predicted as a static point at its type's height (:mod:`lrp_gym.tracking.motion`),
+track is predicted as a static point at its type's height (:mod:`lrp_gym.tracking.range_prediction`),
 an extended-Kalman step that is exact while the robot drives straight.
 
 Per frame (:meth:`LrpTracker.update`):
@@ -41,8 +42,6 @@ trust measured distances use :meth:`Fingerprint.fresh_only`.
 from __future__ import annotations
 
 import numpy as np
-from filterpy.common import Q_discrete_white_noise
-from filterpy.kalman import KalmanFilter
 from scipy.optimize import linear_sum_assignment
 from scipy.stats import chi2
 
@@ -51,8 +50,9 @@ from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.classify import LrpClassifier, range_limits
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.identify import INFEASIBLE, POOL_FACTOR, ReflectorIdentifier
-from lrp_gym.tracking.motion import EgoMotion, predict_static
+from lrp_gym.tracking.kalman import constant_velocity_model, kalman_predict, kalman_update
 from lrp_gym.tracking.prior import DistancePrior
+from lrp_gym.tracking.range_prediction import EgoMotion, ekf_predict_static, static_doppler_ok
 from lrp_gym.tracking.track import Track, TrackView, tracks_fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.world import World
@@ -109,7 +109,6 @@ class LrpTracker:
         self._gate_range = float(chi2.ppf(cfg.gate_probability, 1))
         self._gate_2d = float(chi2.ppf(cfg.gate_probability, 2))
         self._window_mask = (1 << cfg.confirm_window) - 1
-        self._model_cache: dict[tuple[float, float], tuple[np.ndarray, np.ndarray]] = {}
         self.reset()
 
     @classmethod
@@ -136,9 +135,9 @@ class LrpTracker:
                 track_id=t.track_id,
                 type_index=t.type_index,
                 type_name=self.type_names[t.type_index],
-                distance_m=float(t.kf.x[0, 0]),
-                rate_mps=float(t.kf.x[1, 0]),
-                variance_m2=float(t.kf.P[0, 0]),
+                distance_m=float(t.x[0]),
+                rate_mps=float(t.x[1]),
+                variance_m2=float(t.P[0, 0]),
                 rcs_dbsm=float(t.rcs_dbsm),
                 status=t.status,
                 age=t.age,
@@ -167,7 +166,7 @@ class LrpTracker:
             Time since the previous frame (> 0; ignored in the first frame).
         ego : EgoMotion, optional
             The robot's speed now and its odometry since the previous frame. With it, tracks
-            are predicted as static points (:mod:`lrp_gym.tracking.motion`), which is what
+            are predicted as static points (:mod:`lrp_gym.tracking.range_prediction`), which is what
             separates the reflectors from room returns, and detections faster than a
             reflector at their range can be are not taken. Without it, the constant-velocity
             model of the paper.
@@ -200,18 +199,20 @@ class LrpTracker:
 
         window = self.classifier.candidates(detections) if candidates is None else candidates
         self._gated = (detections, window)
-        cand = window if ego is None else window & self._doppler_ok(detections, ego.speed_mps)
+        cand = (
+            window
+            if ego is None
+            else window
+            & static_doppler_ok(
+                detections.range_m,
+                detections.velocity_mps,
+                self._min_height_m,
+                ego.speed_mps,
+                self.cfg.velocity_std_mps,
+            )
+        )
         z = np.column_stack([detections.range_m, detections.velocity_mps])
-        free = np.ones(len(detections), dtype=bool)
-        explained = np.zeros(len(detections), dtype=bool)
-        if self._tracks and len(detections):
-            cost, ok, in_range_gate, d2 = self._gate(detections, z, cand, strict_all=static)
-            explained = np.asarray(in_range_gate.any(axis=0))
-            confirmed = np.array([t.confirmed for t in self._tracks])
-            # Persistent returns choose first; tentative ones share what is left.
-            for rows in (np.flatnonzero(confirmed), np.flatnonzero(~confirmed)):
-                if len(rows) and free.any():
-                    self._assign(rows, cost, ok & free[None, :], d2, detections, z, free)
+        free, explained = self._associate(detections, z, cand, static)
         for t in self._tracks:
             t.age += 1
             t.hits = ((t.hits << 1) | int(t.fresh)) & self._window_mask
@@ -225,7 +226,7 @@ class LrpTracker:
         return ident.fingerprint(self._tracks, prior)
 
     def persistent_fingerprint(self, max_misses: int | None = None) -> Fingerprint:
-        """Every persistent (M-of-N confirmed) track, reported or not, per type.
+        """Every persistent track (passed M of N), reported or not, per type.
 
         More distances than reflectors: the ones a positioning method cannot explain are the
         room's returns. Unlike the gated detections, one-frame clutter is not in it, so a fit
@@ -238,7 +239,7 @@ class LrpTracker:
                 t
                 for t in self._tracks
                 if t.type_index == ty
-                and t.confirmed
+                and t.persistent
                 and (max_misses is None or t.misses <= max_misses)
             ]
             for ty in range(len(self.type_names))
@@ -274,59 +275,49 @@ class LrpTracker:
         )
 
     # ------------------------------------------------------------------ prediction
-    def _model(self, dt_s: float, accel_std: float) -> tuple[np.ndarray, np.ndarray]:
-        """Transition and process noise of the constant-velocity model (cached per dt)."""
-        key = (dt_s, accel_std)
-        model = self._model_cache.get(key)
-        if model is None:
-            F = np.array([[1.0, dt_s], [0.0, 1.0]])
-            Q = Q_discrete_white_noise(2, dt=dt_s, var=accel_std**2)
-            model = (F, Q)
-            if len(self._model_cache) < 64:
-                self._model_cache[key] = model
-        return model
-
     def _predict_cv(self, dt_s: float) -> None:
-        F, Q = self._model(dt_s, self.cfg.process_accel_std_mps2)
-        for t in self._tracks:
-            t.kf.predict(F=F, Q=Q)
+        if not self._tracks:
+            return
+        F, Q = constant_velocity_model(dt_s, self.cfg.process_accel_std_mps2)
+        x, P = kalman_predict(*self._stacked(self._tracks), F, Q)
+        self._unstack(self._tracks, x, P)
 
     def _predict_static(self, dt_s: float, ego: EgoMotion, prev_speed_mps: float) -> None:
         """Extended-Kalman prediction of every track as a static point of its type's height."""
         if not self._tracks:
             return
-        x = np.array([t.kf.x[:, 0] for t in self._tracks])  # (n, 2)
-        P = np.array([t.kf.P for t in self._tracks])  # (n, 2, 2)
+        x, P = self._stacked(self._tracks)
         h = self._height_m[[t.type_index for t in self._tracks]]
-        prev = float(prev_speed_mps)
-        # One call on the state and its two forward-difference neighbours (for the Jacobian).
-        n, eps = len(x), 1e-4
-        xs = np.concatenate([x, x + [eps, 0.0], x + [0.0, eps]])
-        r, v, var_r, var_v = predict_static(xs[:, 0], xs[:, 1], np.tile(h, 3), prev, ego)
-        J = np.empty((n, 2, 2))
-        J[:, 0, 0], J[:, 0, 1] = (r[n : 2 * n] - r[:n]) / eps, (r[2 * n :] - r[:n]) / eps
-        J[:, 1, 0], J[:, 1, 1] = (v[n : 2 * n] - v[:n]) / eps, (v[2 * n :] - v[:n]) / eps
-        r, v, var_r, var_v = r[:n], v[:n], var_r[:n], var_v[:n]
-        _, Q = self._model(dt_s, self.cfg.ego_accel_std_mps2)
-        P = J @ P @ J.transpose(0, 2, 1) + Q
-        P[:, 0, 0] += var_r
-        P[:, 1, 1] += var_v
-        for i, t in enumerate(self._tracks):
-            t.kf.x = np.array([[r[i]], [v[i]]])
-            t.kf.P = P[i]
+        _, Q = constant_velocity_model(dt_s, self.cfg.ego_accel_std_mps2)
+        x, P = ekf_predict_static(x, P, h, float(prev_speed_mps), ego, Q)
+        self._unstack(self._tracks, x, P)
 
-    def _doppler_ok(self, detections: Detections, speed_mps: float) -> np.ndarray:
-        """Boolean (D, T): the radial velocity is one a static reflector of type t can have.
+    @staticmethod
+    def _stacked(tracks: list[Track]) -> tuple[np.ndarray, np.ndarray]:
+        """The tracks' states (n, 2) and covariances (n, 2, 2)."""
+        return np.array([t.x for t in tracks]), np.array([t.P for t in tracks])
 
-        A point ``dz`` above the radar at range ``r`` closes at most at
-        ``|u| * sqrt(1 - dz**2 / r**2)``; a wall approached head-on closes at the full speed.
-        """
-        r = np.maximum(detections.range_m[:, None], 1e-6)
-        cos_elev = np.sqrt(np.maximum(1.0 - (self._min_height_m[None, :] / r) ** 2, 0.0))
-        limit = abs(speed_mps) * cos_elev + 3.0 * self.cfg.velocity_std_mps
-        return np.abs(detections.velocity_mps[:, None]) <= limit
+    @staticmethod
+    def _unstack(tracks: list[Track], x: np.ndarray, P: np.ndarray) -> None:
+        for t, xi, Pi in zip(tracks, x, P, strict=True):
+            t.x, t.P = xi, Pi
 
     # ------------------------------------------------------------------ association
+    def _associate(
+        self, detections: Detections, z: np.ndarray, cand: np.ndarray, static: bool
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Gate and assign this frame's detections; return the (free, explained) masks (D,)."""
+        free = np.ones(len(detections), dtype=bool)
+        if not (self._tracks and len(detections)):
+            return free, np.zeros(len(detections), dtype=bool)
+        cost, ok, in_range_gate, d2 = self._gate(detections, z, cand, strict_all=static)
+        persistent = np.array([t.persistent for t in self._tracks])
+        # Persistent returns choose first; tentative ones share what is left.
+        for rows in (np.flatnonzero(persistent), np.flatnonzero(~persistent)):
+            if len(rows) and free.any():
+                self._assign(rows, cost, ok & free[None, :], d2, detections, z, free)
+        return free, np.asarray(in_range_gate.any(axis=0))
+
     def _gate(
         self, detections: Detections, z: np.ndarray, cand: np.ndarray, *, strict_all: bool
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -341,10 +332,10 @@ class LrpTracker:
         running RCS in units of half the RCS tolerance.
         """
         tracks = self._tracks
-        x = np.array([t.kf.x[:, 0] for t in tracks])  # (n, 2) predicted state
-        S = np.array([t.kf.P for t in tracks]) + self._R  # (n, 2, 2) innovation covariance
+        x, P = self._stacked(tracks)  # predicted states
+        S = P + self._R  # (n, 2, 2) innovation covariance
         types = np.array([t.type_index for t in tracks])
-        strict = np.array([strict_all or not t.confirmed for t in tracks])[:, None]
+        strict = np.array([strict_all or not t.persistent for t in tracks])[:, None]
         rcs = np.array([t.rcs_dbsm for t in tracks])[:, None]
         yr = z[None, :, 0] - x[:, 0, None]
         yv = z[None, :, 1] - x[:, 1, None]
@@ -375,30 +366,13 @@ class LrpTracker:
         keep = sub_ok[r_idx, c_idx]
         r_idx, c_idx = r_idx[keep], c_idx[keep]
         tracks = [self._tracks[rows[r]] for r in r_idx]
-        self._batch_update(tracks, z[c_idx])
+        x, P = kalman_update(*self._stacked(tracks), z[c_idx], self._R)
+        self._unstack(tracks, x, P)
         for t, r, c in zip(tracks, rows[r_idx], c_idx, strict=True):
             t.rcs_dbsm += _RCS_SMOOTHING * (detections.rcs_dbsm[c] - t.rcs_dbsm)
             t.nis += _NIS_SMOOTHING * (min(d2[r, c], self._gate_2d) - t.nis)
             t.fresh = True
         free[c_idx] = False
-
-    def _batch_update(self, tracks: list[Track], z: np.ndarray) -> None:
-        """Kalman update of several tracks at once (H = I, Joseph form, as filterpy's update).
-
-        One vectorised pass over the assigned tracks costs about as much as a single
-        :meth:`KalmanFilter.update` call; the filters keep holding the state.
-        """
-        if not tracks:
-            return
-        x = np.array([t.kf.x[:, 0] for t in tracks])  # (m, 2)
-        P = np.array([t.kf.P for t in tracks])  # (m, 2, 2)
-        K = P @ np.linalg.inv(P + self._R)
-        x = x + np.einsum("mij,mj->mi", K, z - x)
-        I_K = np.eye(2) - K
-        P = I_K @ P @ I_K.transpose(0, 2, 1) + K @ self._R @ K.transpose(0, 2, 1)
-        for i, t in enumerate(tracks):
-            t.kf.x = x[i].reshape(2, 1)
-            t.kf.P = P[i]
 
     def _births(
         self,
@@ -419,10 +393,6 @@ class LrpTracker:
         fit = np.where(cand[idx], self.classifier.misfit(detections.rcs_dbsm[idx]), np.inf)
         best_type = np.argmin(fit, axis=1)
         for d, ty in zip(idx, best_type, strict=True):
-            kf = KalmanFilter(dim_x=2, dim_z=2)
-            kf.x = z[d].reshape(2, 1).copy()
-            kf.P = self._R.copy()
-            kf.H = np.eye(2)
-            kf.R = self._R
-            self._tracks.append(Track(self._next_id, int(ty), kf, float(detections.rcs_dbsm[d])))
+            rcs = float(detections.rcs_dbsm[d])
+            self._tracks.append(Track(self._next_id, int(ty), z[d].copy(), self._R.copy(), rcs))
             self._next_id += 1

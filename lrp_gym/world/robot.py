@@ -13,7 +13,10 @@ def wrap_angle(angle_rad: np.ndarray | float) -> np.ndarray | float:
 
 
 def integrate_unicycle(
-    pose: np.ndarray, speed_mps: np.ndarray | float, turn_rate_rps: np.ndarray | float, dt_s: float
+    pose: np.ndarray,
+    speed_mps: np.ndarray | float,
+    turn_rate_rps: np.ndarray | float,
+    dt_s: np.ndarray | float,
 ) -> np.ndarray:
     """Exact constant-(v, omega) motion over ``dt_s``: arcs, straight lines when omega = 0.
 
@@ -23,6 +26,8 @@ def integrate_unicycle(
         (x, y, theta) in metres and radians.
     speed_mps, turn_rate_rps : float or array (...)
         Forward speed and turn rate, held constant during ``dt_s``.
+    dt_s : float or array (...)
+        Duration; an array gives the poses after each of several durations (sub-steps).
     """
     pose = np.asarray(pose, dtype=float)
     x, y, th = pose[..., 0], pose[..., 1], pose[..., 2]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from agents.evaluate import RandomPolicy, make_agent
+from agents.registry import RandomPolicy, make_agent
 from lrp_gym.errors import InputError
 from lrp_gym.experiments.episodes import (
     EpisodeResult,

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from agents import model_io
-from agents.evaluate import DEFAULT_MODEL, MODELS_DIR, load_ppo, make_agent
+from agents.registry import DEFAULT_MODEL, MODELS_DIR, load_ppo, make_agent
 from lrp_gym.cli import main
 from lrp_gym.errors import InputError
 from lrp_gym.experiments.episodes import make_eval_env

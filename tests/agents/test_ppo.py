@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 import yaml
 
-from agents.evaluate import DEFAULT_MODEL, load_ppo, make_agent
 from agents.ppo import export_model, list_checkpoints, load_hyperparams, split_hyperparams, train
+from agents.registry import DEFAULT_MODEL, load_ppo, make_agent
 from lrp_gym.errors import InputError
 from lrp_gym.experiments.episodes import make_eval_env
 from lrp_gym.experiments.episodes import run_episodes as evaluate

@@ -11,7 +11,7 @@ from gymnasium.utils.env_checker import check_env
 
 import lrp_gym  # noqa: F401  (registers the envs)
 from lrp_gym.envs.nav_env import LRPRadarNavEnv
-from lrp_gym.localization.estimate import PoseEstimate
+from lrp_gym.localization.pose_estimate import PoseEstimate
 
 FAST = {"radar_fidelity": "detections"}
 

@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import lrp_gym  # noqa: F401  (registers the env ids)
-from agents.evaluate import make_agent
+from agents.registry import make_agent
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.envs import ENV_VARIANTS
 from lrp_gym.experiments.episodes import run_episode

@@ -147,7 +147,7 @@ def test_imports_point_one_way():
     [
         ("lrp_gym.world.room", "from lrp_gym.radar.sensor import RadarSensor", "lower layer"),
         ("lrp_gym.radar.sensor", "def f():\n    from lrp_gym.localization import amcl", "lower"),
-        ("lrp_gym.experiments.x", "import agents.evaluate", "only the CLI imports agents"),
+        ("lrp_gym.experiments.x", "import agents.registry", "only the CLI imports agents"),
         ("lrp_gym.envs.x", "if TYPE_CHECKING:\n    from agents import ppo", "only the CLI"),
         ("agents.ppo", "from lrp_gym.commands._common import table", "never import the CLI"),
     ],
@@ -162,7 +162,7 @@ def test_checker_catches_a_wrong_import(module, source, rule):
     [
         ("lrp_gym.localization.amcl", "from lrp_gym.world.room import Room"),
         ("lrp_gym.world.world", "if TYPE_CHECKING:\n    from lrp_gym.config import ScenarioConfig"),
-        ("lrp_gym.commands.evaluate", "from agents.evaluate import make_agent"),
+        ("lrp_gym.commands.evaluate", "from agents.registry import make_agent"),
         ("agents.pure_pursuit", "from lrp_gym.envs.observations import EstimatedPoseObservation"),
         ("lrp_gym.radar.cfar", "from . import processing"),
     ],

@@ -8,7 +8,7 @@ import pytest
 
 from lrp_gym.config import MotionNoiseConfig, load_scenario
 from lrp_gym.localization import Amcl, GridFilter, make_localizer
-from lrp_gym.localization.motion import sample_motion
+from lrp_gym.localization.particle_motion import sample_motion
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world import World
 from lrp_gym.world.robot import odometry_delta

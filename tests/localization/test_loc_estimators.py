@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from lrp_gym.localization.estimators import (
+from lrp_gym.localization.particle_statistics import (
     best_k_mean,
     circular_mean,
     circular_variance_rad2,

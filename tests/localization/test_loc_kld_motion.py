@@ -3,7 +3,7 @@ import pytest
 from scipy.stats import chi2
 
 from lrp_gym.localization.kld import KldBinner, kld_particle_count
-from lrp_gym.localization.motion import sample_motion, standard_normals32
+from lrp_gym.localization.particle_motion import sample_motion, standard_normals32
 from lrp_gym.world.robot import OdometryNoise, apply_odometry
 
 

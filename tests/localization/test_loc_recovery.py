@@ -13,8 +13,8 @@ import pytest
 
 from lrp_gym.config import load_scenario
 from lrp_gym.localization.amcl import Amcl
-from lrp_gym.localization.estimators import dominant_cluster
 from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.localization.particle_statistics import dominant_cluster
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world import World
 from lrp_gym.world.robot import odometry_delta

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lrp_gym.radar import fast
+from lrp_gym.radar import detection_model
 from lrp_gym.radar.calibrate import sweep
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world import World
@@ -40,8 +40,8 @@ def test_detections_fidelity_matches_signal_model(paper_cfg):
 
 def test_committed_error_constants_match_a_fresh_fit(paper_cfg):
     res = sweep(paper_cfg, snrs_db=(16.0, 25.0), trials=150, seed=1)
-    assert res["RANGE_ERROR_K"] == pytest.approx(fast.RANGE_ERROR_K, rel=0.15)
-    assert res["DOPPLER_ERROR_K"] == pytest.approx(fast.DOPPLER_ERROR_K, rel=0.15)
+    assert res["RANGE_ERROR_K"] == pytest.approx(detection_model.RANGE_ERROR_K, rel=0.15)
+    assert res["DOPPLER_ERROR_K"] == pytest.approx(detection_model.DOPPLER_ERROR_K, rel=0.15)
     # isolated targets: both fidelities detect alike at the edge of detectability
     for row in res["rows"]:
         assert abs(row["pd_signal"] - row["pd_detections"]) < 0.08, row

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from lrp_gym.radar.evaluate import lrp_detection_rate
+from lrp_gym.radar.delivery_rate import lrp_detection_rate
 
 
 def test_lrps_detected_with_rcs_in_tracker_window(paper_cfg):

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lrp_gym.tracking.motion import EgoMotion, predict_static
 from lrp_gym.tracking.prior import DistancePrior
+from lrp_gym.tracking.range_prediction import EgoMotion, predict_static
 from lrp_gym.world.robot import apply_odometry
 
 

@@ -213,7 +213,7 @@ def test_bad_arguments(paper_cfg, paper_world):
 # ---------------------------------------------------------------- ego motion and map prior
 def exact_ego(trajectory):
     """Noise-free odometry and speed of a drive (what the tracker's ego input carries)."""
-    from lrp_gym.tracking.motion import EgoMotion
+    from lrp_gym.tracking.range_prediction import EgoMotion
     from lrp_gym.world.robot import odometry_delta
 
     poses = trajectory.poses
@@ -274,7 +274,7 @@ def test_prior_picks_the_reflectors_over_a_static_phantom(two_type_world, loop):
 
 def test_ego_motion_rejects_a_wall_approached_head_on(paper_cfg, paper_world):
     """A return closing at the robot's full speed cannot be a reflector above it."""
-    from lrp_gym.tracking.motion import EgoMotion
+    from lrp_gym.tracking.range_prediction import EgoMotion
 
     def confirmed(use_ego):
         tracker = LrpTracker.from_world(paper_world, paper_cfg.tracking)

@@ -118,3 +118,50 @@ def predict_static(
         range_var = range_var + 0.5 * trans**2
         rate_var = rate_var + 0.5 * ego.speed_mps**2
     return r_new.mean(axis=0), rate_new.mean(axis=0), range_var, rate_var
+
+
+def ekf_predict_static(
+    x: np.ndarray,
+    P: np.ndarray,
+    height_m: np.ndarray,
+    prev_speed_mps: float,
+    ego: EgoMotion,
+    Q: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Extended-Kalman prediction of stacked tracks (n, 2), (n, 2, 2) as static points.
+
+    The mean is :func:`predict_static`; its Jacobian comes from forward differences, and the
+    spread of the two sides' predictions adds to the diagonal of ``J P J^T + Q``.
+    """
+    # One call on the state and its two forward-difference neighbours (for the Jacobian).
+    n, eps = len(x), 1e-4
+    xs = np.concatenate([x, x + [eps, 0.0], x + [0.0, eps]])
+    r, v, var_r, var_v = predict_static(
+        xs[:, 0], xs[:, 1], np.tile(height_m, 3), prev_speed_mps, ego
+    )
+    J = np.empty((n, 2, 2))
+    J[:, 0, 0], J[:, 0, 1] = (r[n : 2 * n] - r[:n]) / eps, (r[2 * n :] - r[:n]) / eps
+    J[:, 1, 0], J[:, 1, 1] = (v[n : 2 * n] - v[:n]) / eps, (v[2 * n :] - v[:n]) / eps
+    P = J @ P @ J.transpose(0, 2, 1) + Q
+    P[:, 0, 0] += var_r[:n]
+    P[:, 1, 1] += var_v[:n]
+    return np.column_stack([r[:n], v[:n]]), P
+
+
+def static_doppler_ok(
+    range_m: np.ndarray,
+    velocity_mps: np.ndarray,
+    min_height_m: np.ndarray,
+    speed_mps: float,
+    velocity_std_mps: float,
+) -> np.ndarray:
+    """Boolean (D, T): detection d's radial velocity is one a static reflector of type t can have.
+
+    A point ``dz`` (``min_height_m[t]``) above the radar at range ``r`` closes at most at
+    ``|u| * sqrt(1 - dz**2 / r**2)``; a wall approached head-on closes at the full speed. The
+    bound is widened by three velocity standard deviations.
+    """
+    r = np.maximum(range_m[:, None], 1e-6)
+    cos_elev = np.sqrt(np.maximum(1.0 - (min_height_m[None, :] / r) ** 2, 0.0))
+    limit = abs(speed_mps) * cos_elev + 3.0 * velocity_std_mps
+    return np.abs(velocity_mps[:, None]) <= limit

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from lrp_gym.localization.motion import wrap_fast
+from lrp_gym.localization.particle_motion import wrap_fast
 
 
 def circular_mean(angles_rad: np.ndarray, weights: np.ndarray | None = None) -> float:
