@@ -221,10 +221,12 @@ class LRPRadarNavEnv(gym.Env):
         self._done = False
         known = self.pose if self.cfg.localization.init == "gaussian" else None
         self.stack.reset(rng, known)
-        # A patrol passes its start again at the end of every lap: the first projections search
-        # only the start of lap one (one-lap paths: the whole path, as before).
+        # The robot starts at the path's start: the first projections search only its first
+        # metres. A global projection put a spread-out first estimate (uniform init) far along
+        # the path, the observation's waypoints then pointed near the goal and the robot cut
+        # across; a patrol also passes its start again at the end of every lap.
         laps = task.laps if task.mode == "path" else 1
-        first_m = np.inf if laps == 1 else min(_PROGRESS_WINDOW_M, self.path.length_m / laps)
+        first_m = min(_PROGRESS_WINDOW_M, self.path.length_m / laps)
         self._s_true = self.path.project(self.pose[:2], 0.0, first_m)
         if self.perturbations is not None:
             # The radar may see another layout than the surveyed one the localiser uses.

@@ -280,8 +280,10 @@ def plot_matrix(result: dict[str, Any]):
             if v is None:
                 continue
             grid[i, j] = v
+            lo, hi = ("", "") if ci is None else (f"{100 * ci[0]:.0f}", f"{100 * ci[1]:.0f}")
+            # One number when both ends round alike (as in the CLI table).
             text[i, j] = f"{100 * v:.0f} %" + (
-                "" if ci is None else f"\n{100 * ci[0]:.0f}-{100 * ci[1]:.0f}"
+                "" if ci is None else f"\n{lo}-{hi}" if lo != hi else f"\n{lo}"
             )
         cmap = plt.get_cmap("RdYlGn").with_extremes(bad="0.92")  # grey: no such cell
         im = ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=0.0, vmax=1.0, aspect="auto")
