@@ -70,9 +70,11 @@ def task_option() -> Any:
     )
 
 
-def episodes_option(what: str = "Number of episodes") -> Any:
-    """``--episodes N`` (shared with robustness, same default)."""
-    return typer.Option(20, "--episodes", metavar="N", help=f"{what} (seeds seed, seed+1, ...).")
+def episodes_option(what: str = "Number of episodes", default: int = 20) -> Any:
+    """``--episodes N`` (shared with robustness, which defaults to more)."""
+    return typer.Option(
+        default, "--episodes", metavar="N", help=f"{what} (seeds seed, seed+1, ...)."
+    )
 
 
 def check_agent(agent: str, model: Path | None, task: str | None, episodes: int) -> None:

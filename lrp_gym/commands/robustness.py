@@ -39,6 +39,11 @@ from lrp_gym.commands.evaluate import (
 )
 from lrp_gym.errors import InputError
 
+#: = ``lrp_gym.experiments.robustness.DEFAULT_EPISODES`` (the experiment is imported lazily so
+#: ``lrp-gym --help`` stays fast; a test keeps the two equal).
+DEFAULT_EPISODES = 50
+BASELINE = "none"
+
 
 def _floats(text: str, flag: str) -> list[float]:
     try:
@@ -58,7 +63,7 @@ def robustness(
     task: str = task_option(),
     fidelity: str = fidelity_option(),
     sets: list[str] = sets_option(),
-    episodes: int = episodes_option("Episodes per cell"),
+    episodes: int = episodes_option("Episodes per cell", DEFAULT_EPISODES),
     severities: str = typer.Option(
         "0.25,0.5,1", "--severities", metavar="S,S,...", help="Severities in [0, 1], by commas."
     ),
@@ -70,7 +75,7 @@ def robustness(
     ),
     seed: int = seed_option("Seed of the first episode of every cell."),
     out: Path = out_option("the matrix as JSON"),
-    plot: Path = plot_option("heatmaps (success, p95 error)"),
+    plot: Path = plot_option("heat maps (success, time localised; value and 95 % interval)"),
     force: bool = force_option(),
     json_out: bool = json_option("the matrix"),
 ) -> None:
@@ -161,14 +166,38 @@ def _run(rb, agent, env, names, sev, episodes, seed, task, model, scenario, quie
     return result
 
 
-def _print(result: dict, budget: int) -> None:
-    def f(v, pct=False):
-        return "-" if v is None else (f"{100 * v:.0f} %" if pct else f"{v:.3f}")
+def _cell(v: float | None, ci: list[float] | None, fmt) -> str:
+    """The value, and below it its 95 % interval ``lo-hi`` (one number when both ends agree)."""
+    if v is None:
+        return "-"
+    if ci is None:
+        return fmt(v)
+    lo, hi = fmt(ci[0]), fmt(ci[1])
+    return f"{fmt(v)}\n{lo if lo == hi else f'{lo}-{hi}'}"
 
+
+def _pct(v: float | None, ci: list[float] | None) -> str:
+    """A share in percent."""
+    return _cell(v, ci, lambda x: f"{100 * x:.0f}")
+
+
+def _cm(v: float | None, ci: list[float] | None) -> str:
+    """A length in metres shown in centimetres (one decimal below 10 cm)."""
+    return _cell(v, ci, lambda x: f"{100 * x:.1f}" if 100 * x < 9.95 else f"{100 * x:.0f}")
+
+
+def _frames(v: float | None, ci: list[float] | None) -> str:
+    """Frames, rounded to whole ones (a median of an even count ends in .5; the JSON keeps it)."""
+    return _cell(v, ci, lambda x: f"{x:.0f}")
+
+
+def _print(result: dict, budget: int) -> None:
     e, s = result["episodes"], result["seed"]
-    # Two-line headers and no vertical rules: the nine columns fit 80 columns unfolded.
-    cols: tuple[str, ...] = ("perturbation", "sev.", "success", "coll.", "p50\n[m]", "p95\n[m]")
-    cols += ("localised", "recov.\n[frames]", f"recov.\n<= {budget}")
+    # Each cell: the value over its 95 % interval. Two-line headers, no vertical rules, lengths
+    # in cm, the severity under the name: the nine columns fit 80 columns unfolded (p50 is in
+    # the JSON).
+    cols: tuple[str, ...] = ("perturbation\n  severity", "succ.\n[%]", "coll.\n[%]", "p95\n[cm]")
+    cols += ("loc.\n[%]", "wrong\n[%]", "t.loc\n[fr.]", "recov.\n[fr.]", f"<= {budget}\n[%]")
     t = table(
         f"{result['agent']} on {result['env_id']} ({result['scenario']}, "
         f"{result['task'] or 'its task'}), {e} episodes/cell, seeds {s}..{s + e - 1}",
@@ -176,23 +205,28 @@ def _print(result: dict, budget: int) -> None:
         left=1,
     )
     t.box, t.padding, t.pad_edge = box.SIMPLE_HEAD, (0, 0), False
-    t.columns[0].no_wrap = True  # perturbation names stay whole (missed_detections)
+    for col in t.columns:  # names (missed_detections) and intervals stay whole
+        col.no_wrap = True
     for c in result["cells"]:
+        ci = c.get("ci95") or {}
         t.add_row(
-            c["perturbation"],
-            f"{c['severity']:g}",
-            f(c["success_rate"], True),
-            f(c["collision_rate"], True),
-            f(c["p50_loc_error_m"]),
-            f(c["p95_loc_error_m"]),
-            f(c["time_localised"], True),
-            f(c["recovery_frames"]),
-            f(c["recovered_within_budget"], True),
+            c["perturbation"] + ("" if c["perturbation"] == BASELINE else f"\n  {c['severity']:g}"),
+            _pct(c["success_rate"], ci.get("success_rate")),
+            _pct(c["collision_rate"], ci.get("collision_rate")),
+            _cm(c["p95_loc_error_m"], ci.get("p95_loc_error_m")),
+            _pct(c["time_localised"], ci.get("time_localised")),
+            _pct(c.get("confidently_wrong_rate"), ci.get("confidently_wrong_rate")),
+            _frames(c.get("median_frames_to_localised"), ci.get("median_frames_to_localised")),
+            _frames(c["recovery_frames"], ci.get("recovery_frames")),
+            _pct(c["recovered_within_budget"], ci.get("recovered_within_budget")),
         )
     console.print(t)
     console.print(
-        "p50, p95: localisation error percentiles; localised: share of steps within 0.2 m; "
-        f"recov.: frames to recover after a kidnap, and the share recovered within {budget}.",
+        "Each cell: value, and below it the 95 % interval (Wilson for succ., coll. and "
+        f"<= {budget}; bootstrap over episodes for the rest). p95: localisation error; loc.: "
+        "steps within 0.2 m; wrong: converged steps off by > 0.3 m; t.loc: median frames "
+        "to first localised; recov.: median frames to recover after a kidnap; "
+        f"<= {budget}: kidnaps recovered within {budget} frames.",
         highlight=False,
     )
 

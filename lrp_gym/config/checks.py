@@ -157,6 +157,11 @@ def _task_problems(cfg: ScenarioConfig, room) -> Iterator[str]:
                 f"{_fmt(list(path[i + 1]))} passes within robot.radius_m ({_fmt(radius)} m) "
                 "of an obstacle"
             )
+    if task.laps > 1 and len(path) >= 2 and not task.closed:
+        yield (
+            f"task.laps: {task.laps} laps need a closed task.path (its last waypoint "
+            f"{_fmt(list(path[-1]))} equal to its first {_fmt(list(path[0]))})"
+        )
     g = task.goal
     if g.min_distance_m >= g.max_distance_m:
         yield (

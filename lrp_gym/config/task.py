@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from typing import Annotated, Literal
 
+import numpy as np
 from pydantic import (
     Field,
     field_validator,
@@ -79,9 +80,24 @@ class EnvConfig(Strict):
     render_size_px: Annotated[int, Field(ge=64, le=2048)] = 480
 
 
+#: Default step limit of an episode (the patrol scenarios set their own, see ``max_episode_steps``).
+DEFAULT_MAX_EPISODE_STEPS = 200
+#: The last waypoint of a closed loop lies within this distance of the first (metres).
+LOOP_CLOSURE_M = 1e-3
+
+
 class TaskConfig(Strict):
+    """The task: a fixed path (driven ``laps`` times) or sampled goals, the frame period, the
+    goal tolerance, rewards, and the step limit after which an episode is truncated."""
+
     mode: Literal["path", "goal"] = "path"
     path: list[Vec2] = []
+    # A closed path (last waypoint = first) driven this many times in one episode: a patrol, long
+    # enough that a perturbation happening once is not censored by the episode's end.
+    laps: Annotated[int, Field(ge=1, le=1000)] = 1
+    # The env truncates an episode after this many steps (gymnasium's TimeLimit, owned by the
+    # scenario so a long patrol is not cut short).
+    max_episode_steps: Annotated[int, Field(ge=1, le=1_000_000)] = DEFAULT_MAX_EPISODE_STEPS
     frame_period_s: PositiveFloat = 0.25
     goal_tolerance_m: PositiveFloat = 0.25
     goal: GoalTaskConfig = GoalTaskConfig()
@@ -92,3 +108,17 @@ class TaskConfig(Strict):
         if self.mode == "path" and len(self.path) < 2:
             raise PydanticCustomError("path", "mode 'path' needs at least 2 waypoints in path", {})
         return self
+
+    @property
+    def closed(self) -> bool:
+        """Whether ``path`` is a closed loop (its last waypoint is its first)."""
+        return len(self.path) >= 2 and bool(
+            np.hypot(*np.subtract(self.path[-1], self.path[0])) <= LOOP_CLOSURE_M
+        )
+
+    def driven_path(self) -> np.ndarray:
+        """The waypoints (K, 2) one episode drives: ``path``, repeated ``laps`` times."""
+        pts = np.asarray(self.path, dtype=float).reshape(-1, 2)
+        if self.laps == 1:
+            return pts
+        return np.concatenate([pts] + [pts[1:]] * (self.laps - 1))

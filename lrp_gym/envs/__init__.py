@@ -13,7 +13,11 @@ from __future__ import annotations
 
 from gymnasium.envs.registration import register, registry
 
-MAX_EPISODE_STEPS = 200
+from lrp_gym.config.task import DEFAULT_MAX_EPISODE_STEPS
+
+#: Episodes are truncated by the env at the scenario's ``task.max_episode_steps`` (default
+#: 200), not by a ``TimeLimit`` wrapper from the registration, so a patrol scenario sets its own.
+MAX_EPISODE_STEPS = DEFAULT_MAX_EPISODE_STEPS
 
 ENV_VARIANTS: dict[str, dict] = {
     "LRPRadarNav-v0": {},
@@ -29,7 +33,6 @@ def register_envs() -> None:
             register(
                 id=env_id,
                 entry_point="lrp_gym.envs.nav_env:LRPRadarNavEnv",
-                max_episode_steps=MAX_EPISODE_STEPS,
                 kwargs=kwargs,
             )
 

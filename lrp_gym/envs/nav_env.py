@@ -102,16 +102,17 @@ class LRPRadarNavEnv(gym.Env):
     **Starting state**: ``task.mode: goal`` (the default without a scenario) draws a free
     start, a goal ``task.goal.min_distance_m`` to ``max_distance_m`` away with a free path
     (straight, or through one via point) and a heading within 90 degrees of the first leg;
-    ``path`` starts at ``robot.start_pose`` on ``task.path``. The localiser starts spread over
+    ``path`` starts at ``robot.start_pose`` on ``task.path`` (driven ``task.laps`` times when
+    the path is a closed loop: a patrol). The localiser starts spread over
     the room (``localization.init: uniform``, global localisation) or around the true pose
     (``gaussian``). The first radar frame is taken at reset.
 
     **Episode end**: terminated on a collision (the motion is checked in ``env.substeps``
     sub-steps; the robot stops at the last free one) or when the goal is reached (within
     ``task.goal_tolerance_m`` and with the path's progress within two tolerances of its
-    end). Truncated after ``MAX_EPISODE_STEPS = 200`` steps by the ``TimeLimit`` wrapper that
-    ``gym.make`` adds (registration in :mod:`lrp_gym.envs`); the class itself never
-    truncates.
+    end). Truncated after ``task.max_episode_steps`` steps (default 200) by the env itself, so
+    the scenario sets the limit (a patrol needs more); ``gym.make(..., max_episode_steps=N)``
+    still adds gymnasium's ``TimeLimit`` on top.
 
     **Info**: true and estimated pose, position and heading errors, pose std, particles, ESS,
     detections, convergence, confidence, modes, progress, path length, ``collision``,
@@ -210,7 +211,7 @@ class LRPRadarNavEnv(gym.Env):
         task = self.cfg.task
         if task.mode == "path":
             self.pose = np.asarray(self.cfg.robot.start_pose, dtype=float)
-            path = WaypointPath.from_points(np.asarray(task.path))
+            path = WaypointPath.from_points(task.driven_path())
         else:
             self.pose, path = sample_goal_task(self.world.room, task, self._radius_m + 0.1, rng)
         self.path = path
@@ -219,12 +220,18 @@ class LRPRadarNavEnv(gym.Env):
         self._done = False
         known = self.pose if self.cfg.localization.init == "gaussian" else None
         self.stack.reset(rng, known)
-        self._s_true = path.project(self.pose[:2])
+        # The robot starts at the path's start: the first projections search only its first
+        # metres. A global projection put a spread-out first estimate (uniform init) far along
+        # the path, the observation's waypoints then pointed near the goal and the robot cut
+        # across; a patrol also passes its start again at the end of every lap.
+        laps = task.laps if task.mode == "path" else 1
+        first_m = min(_PROGRESS_WINDOW_M, path.length_m / laps)
+        self._s_true = path.project(self.pose[:2], 0.0, first_m)
         if self.perturbations is not None:
             # The radar may see another layout than the surveyed one the localiser uses.
             self.stack.set_radar_layout(self.perturbations.reset(self._frame_context(), rng))
         self._sense(np.zeros(3), np.zeros(2))
-        self._s_est = path.project(self._estimate_now().pose[:2])
+        self._s_est = path.project(self._estimate_now().pose[:2], 0.0, first_m)
         return self._observe(), self._info(collided=False, reached=False, rewards=None)
 
     def step(self, action):
@@ -253,11 +260,12 @@ class LRPRadarNavEnv(gym.Env):
         reward, rewards = self._reward(progress_m, collided, reached)
         terminated = self._terminated(collided, reached)
         self._done = terminated
+        truncated = not terminated and self._steps >= self.cfg.task.max_episode_steps
         obs = self._observe()
         info = self._info(collided=collided, reached=reached, rewards=rewards)
         if self.render_mode == "human":
             self.render()
-        return obs, reward, terminated, False, info
+        return obs, reward, terminated, truncated, info
 
     def render(self):
         if self.render_mode is None:
@@ -291,7 +299,7 @@ class LRPRadarNavEnv(gym.Env):
         return float(sum(rewards.values())), rewards
 
     def _terminated(self, collided: bool, reached: bool) -> bool:
-        """A collision or the goal ends the episode (the 200-step limit is the wrapper's)."""
+        """A collision or the goal ends the episode (the step limit truncates it instead)."""
         return collided or reached
 
     def _goal_reached(self) -> bool:

@@ -4,12 +4,17 @@ Every cell runs ``episodes`` episodes on seeds ``seed .. seed + episodes - 1`` w
 runner of :mod:`lrp_gym.experiments.episodes` (same policy, same env id, same scenario; only the
 ``perturbations`` override differs), plus one baseline row without perturbation. Per cell:
 success rate, collision rate, localisation error percentiles (p50, p95, pooled over all steps),
-the share of steps localised (error < :data:`LOCALISED_M`) and, for ``kidnapping``, the frames
-AMCL needs to get back within :data:`LOCALISED_M` of the truth after the jump.
+the share of steps localised (error < :data:`LOCALISED_M`), the trust metrics of
+:mod:`lrp_gym.localization.metrics` (confidently wrong share, median frames to localise) and,
+for ``kidnapping``, the frames AMCL needs to get back within :data:`LOCALISED_M` of the truth
+after the jump. Every number comes with a 95 % interval (``ci95``; see
+:mod:`lrp_gym.experiments.intervals`).
 
 Default setting: the fast (detections-level) env ``LRPRadarNavFast-v0`` on the paper scenario
 in path mode (``ipin2023``: its 15-waypoint path, the same start every episode; seeds change
 sensor noise and the perturbations' draws). ``task="goal"`` uses sampled start/goal pairs.
+The patrol scenarios (``ipin2023-patrol``, ``ipin2023-2types-patrol``: a closed loop driven six
+times, about 170 frames) leave room after a once-only perturbation such as a kidnap.
 """
 
 from __future__ import annotations
@@ -21,13 +26,31 @@ import gymnasium as gym
 import numpy as np
 
 from lrp_gym.config import PerturbationsConfig, deep_merge
-from lrp_gym.experiments.episodes import Policy, make_eval_env, nav_env, run_episode, summarize
+from lrp_gym.experiments.episodes import (
+    EpisodeResult,
+    Policy,
+    make_eval_env,
+    nav_env,
+    run_episode,
+    summarize,
+)
+from lrp_gym.experiments.intervals import (
+    bootstrap_interval,
+    median_of,
+    pooled_percentile,
+    pooled_share,
+    wilson_interval,
+)
+from lrp_gym.localization import metrics
+from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M, frames_to_localised
 from lrp_gym.perturbations.robot_motion import Kidnapping
 
-LOCALISED_M = 0.2
+LOCALISED_M = metrics.LOCALISED_M
 RECOVERY_BUDGET_FRAMES = 15
 DEFAULT_ENV = "LRPRadarNavFast-v0"
 DEFAULT_SEVERITIES = (0.25, 0.5, 1.0)
+#: Episodes per cell by default: a 95 % Wilson interval at 100 % success is then 93-100 %.
+DEFAULT_EPISODES = 50
 PERTURBATION_NAMES = tuple(PerturbationsConfig.model_fields)
 BASELINE = "none"
 
@@ -73,39 +96,86 @@ def run_cell(
     episodes: int,
     seed: int,
     on_episode: Callable[[], None] | None = None,
+    rng: np.random.Generator | None = None,
 ) -> dict[str, Any]:
-    """Run one cell's episodes in ``env`` (already built with the cell's overrides)."""
-    results, recov, kidnapped = [], [], 0
+    """Run one cell's episodes in ``env`` (already built with the cell's overrides).
+
+    ``rng`` draws the bootstrap resamples of the intervals (default: seeded with ``seed``).
+    """
+    results: list[EpisodeResult] = []
+    recov: list[int | None] = []
     for i in range(episodes):
         res = run_episode(env, policy, seed + i)
         results.append(res)
         pert = nav_env(env).perturbations
         kid = pert.get("kidnapping") if pert is not None else None
         if isinstance(kid, Kidnapping) and kid.kidnap_frame is not None:
-            kidnapped += 1
             recov.append(recovery_frames(res.loc_error_m, kid.kidnap_frame))
         if on_episode is not None:
             on_episode()
-    s = summarize(results)
-    err = np.concatenate([r.loc_error_m for r in results])
+    rng = np.random.default_rng(seed) if rng is None else rng
+    return cell_statistics(name, severity, results, recov, rng)
+
+
+def cell_statistics(
+    name: str,
+    severity: float,
+    results: Sequence[EpisodeResult],
+    recov: Sequence[int | None],
+    rng: np.random.Generator,
+) -> dict[str, Any]:
+    """One cell's numbers and their 95 % intervals (``ci95``, same keys).
+
+    Rates over episodes (success, collision, kidnap recovered within the budget) get Wilson
+    intervals. Statistics pooled over steps (error percentiles, share of steps localised,
+    confidently wrong share) and per-episode medians (frames to localise, recovery frames) get
+    a percentile bootstrap over whole episodes, because steps of one episode are correlated.
+    """
+    n = len(results)
+    s = summarize(list(results))
+    errs = [r.loc_error_m for r in results]
+    err = np.concatenate(errs)
+    kidnapped = len(recov)
+    within = sum(r is not None and r <= RECOVERY_BUDGET_FRAMES for r in recov)
     done = [r for r in recov if r is not None]
+    # Per episode: the frames until first localised (never: the episode's length, as in
+    # trust_metrics) and the errors of its converged steps (for the confidently wrong share).
+    first = [frames_to_localised(e) for e in errs]
+    to_loc = [len(e) if f is None else f for f, e in zip(first, errs)]
+    wrong = [r.loc_error_m[r.converged] > CONFIDENTLY_WRONG_M for r in results]
+    n_succ = sum(bool(r.success) for r in results)
+    n_coll = sum(bool(r.collision) for r in results)
+
+    def boot(items, stat):
+        return bootstrap_interval(items, stat, rng)
+
+    ci = {
+        "success_rate": wilson_interval(n_succ, n),
+        "collision_rate": wilson_interval(n_coll, n),
+        "p50_loc_error_m": boot(errs, pooled_percentile(50)),
+        "p95_loc_error_m": boot(errs, pooled_percentile(95)),
+        "time_localised": boot([e < LOCALISED_M for e in errs], pooled_share),
+        "confidently_wrong_rate": boot(wrong, pooled_share),
+        "median_frames_to_localised": boot(to_loc, median_of),
+        "recovery_frames": boot(list(recov), median_of),
+        "recovered_within_budget": wilson_interval(within, kidnapped) if kidnapped else None,
+    }
     return {
         "perturbation": name,
         "severity": float(severity),
-        "episodes": episodes,
-        "success_rate": s["success_rate"],
-        "collision_rate": s["collision_rate"],
+        "episodes": n,
+        "success_rate": n_succ / n,
+        "collision_rate": n_coll / n,
         "p50_loc_error_m": float(np.percentile(err, 50)) if err.size else None,
         "p95_loc_error_m": s["p95_loc_error_m"],
         "time_localised": s["time_localised"],
+        "confidently_wrong_rate": s["confidently_wrong_rate"],
+        "median_frames_to_localised": s["median_frames_to_localised"],
         "kidnapped_episodes": kidnapped,
         "recovery_frames": float(np.median(done)) if done else None,
-        "recovery_frames_per_episode": recov,
-        "recovered_within_budget": (
-            sum(r is not None and r <= RECOVERY_BUDGET_FRAMES for r in recov) / kidnapped
-            if kidnapped
-            else None
-        ),
+        "recovery_frames_per_episode": list(recov),
+        "recovered_within_budget": within / kidnapped if kidnapped else None,
+        "ci95": {k: None if v is None else [v[0], v[1]] for k, v in ci.items()},
     }
 
 
@@ -115,7 +185,7 @@ def run_matrix(
     env_id: str = DEFAULT_ENV,
     perturbations: Sequence[str] = PERTURBATION_NAMES,
     severities: Sequence[float] = DEFAULT_SEVERITIES,
-    episodes: int = 10,
+    episodes: int = DEFAULT_EPISODES,
     seed: int = 0,
     task: str | None = "path",
     overrides: dict[str, Any] | None = None,
@@ -184,42 +254,51 @@ def run_matrix(
 
 
 def plot_matrix(result: dict[str, Any]):
-    """Heatmaps of success rate and p95 localisation error (perturbation x severity)."""
+    """Heat maps of the success rate and the share of steps localised (perturbation x severity).
+
+    The baseline (no perturbation) is the first row, in the first column. Each cell shows the
+    value and its 95 % interval (``ci95``); the colour is the value.
+    """
     import matplotlib.pyplot as plt
 
-    cells = [c for c in result["cells"] if c["perturbation"] != BASELINE]
-    base = next((c for c in result["cells"] if c["perturbation"] == BASELINE), None)
+    cells = result["cells"]
     names = list(dict.fromkeys(c["perturbation"] for c in cells))
-    sevs = sorted({c["severity"] for c in cells})
+    sevs = sorted({c["severity"] for c in cells if c["perturbation"] != BASELINE}) or [0.0]
     fig, axes = plt.subplots(
-        1, 2, figsize=(4 + 1.6 * len(sevs), 1.2 + 0.5 * len(names)), squeeze=False
+        1, 2, figsize=(3.2 + 2.0 * len(sevs), 1.3 + 0.55 * len(names)), squeeze=False
     )
-    for ax, key, title, cmap in (
-        (axes[0, 0], "success_rate", "success rate", "RdYlGn"),
-        (axes[0, 1], "p95_loc_error_m", "p95 localisation error (m)", "viridis_r"),
+    for ax, key, title in (
+        (axes[0, 0], "success_rate", "success"),
+        (axes[0, 1], "time_localised", "steps localised (< 0.2 m)"),
     ):
         grid = np.full((len(names), len(sevs)), np.nan)
+        text = np.full(grid.shape, "", dtype=object)
         for c in cells:
-            v = c[key]
-            grid[names.index(c["perturbation"]), sevs.index(c["severity"])] = (
-                np.nan if v is None else v
+            i = names.index(c["perturbation"])
+            j = 0 if c["perturbation"] == BASELINE else sevs.index(c["severity"])
+            v, ci = c[key], (c.get("ci95") or {}).get(key)
+            if v is None:
+                continue
+            grid[i, j] = v
+            lo, hi = ("", "") if ci is None else (f"{100 * ci[0]:.0f}", f"{100 * ci[1]:.0f}")
+            # One number when both ends round alike (as in the CLI table).
+            text[i, j] = f"{100 * v:.0f} %" + (
+                "" if ci is None else f"\n{lo}-{hi}" if lo != hi else f"\n{lo}"
             )
-        vmax = (
-            1.0
-            if key == "success_rate"
-            else max(np.nanmax(grid) if np.isfinite(grid).any() else 1.0, 0.2)
-        )
-        im = ax.imshow(grid, cmap=cmap, vmin=0.0, vmax=vmax, aspect="auto")
-        for (i, j), v in np.ndenumerate(grid):
-            ax.text(j, i, "-" if np.isnan(v) else f"{v:.2f}", ha="center", va="center", fontsize=8)
+        cmap = plt.get_cmap("RdYlGn").with_extremes(bad="0.92")  # grey: no such cell
+        im = ax.imshow(np.ma.masked_invalid(grid), cmap=cmap, vmin=0.0, vmax=1.0, aspect="auto")
+        for (i, j), t in np.ndenumerate(text):
+            if t:
+                ax.text(j, i, t, ha="center", va="center", fontsize=7, linespacing=1.1)
         ax.set_xticks(range(len(sevs)), [f"{s:g}" for s in sevs])
         ax.set_yticks(range(len(names)), names)
-        ax.set_xlabel("severity")
-        bt = "" if base is None or base[key] is None else f" (baseline {base[key]:.2f})"
-        ax.set_title(title + bt, fontsize=9)
+        ax.set_xlabel("severity (baseline row: none)")
+        ax.set_title(f"{title}: value, 95 % interval", fontsize=9)
         fig.colorbar(im, ax=ax, fraction=0.046)
     fig.suptitle(
-        f"{result['agent']} on {result['env_id']}, {result['episodes']} episodes/cell", fontsize=10
+        f"{result['agent']} on {result.get('scenario') or result['env_id']}, "
+        f"{result['episodes']} episodes/cell",
+        fontsize=10,
     )
     fig.tight_layout()
     return fig

@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 
 from lrp_gym.cli import main
-from lrp_gym.experiments.robustness import cell_overrides, recovery_frames, run_matrix
+from lrp_gym.experiments.episodes import EpisodeResult
+from lrp_gym.experiments.intervals import wilson_interval
+from lrp_gym.experiments.robustness import (
+    cell_overrides,
+    cell_statistics,
+    recovery_frames,
+    run_matrix,
+)
 
 
 def test_recovery_frames_counts_from_the_kidnap_frame():
@@ -16,6 +23,61 @@ def test_recovery_frames_counts_from_the_kidnap_frame():
     assert recovery_frames(err, 3) == 3  # frame 6 is the first one back under 0.2 m
     assert recovery_frames(err, 1) == 0
     assert recovery_frames(np.array([0.1, 3.0, 3.0]), 2) is None
+
+
+def _episode(seed, success, errors, converged=None):
+    e = np.asarray(errors, float)
+    n = len(e)
+    return EpisodeResult(
+        seed=seed,
+        success=success,
+        collision=not success,
+        steps=n,
+        episode_return=0.0,
+        path_length_m=0.0,
+        time_to_goal_s=None,
+        loc_error_m=e,
+        converged=np.ones(n, bool) if converged is None else np.asarray(converged, bool),
+        cross_track_m=np.zeros(n),
+        true_xy=np.zeros((n + 1, 2)),
+        est_xy=np.zeros((n + 1, 2)),
+        waypoints_m=np.zeros((2, 2)),
+    )
+
+
+def test_cell_statistics_intervals_and_trust_metrics():
+    # 10 episodes of 20 steps: 7 localised from frame 2 on and successful, 3 never localised
+    # (error 1 m, converged: confidently wrong) and failed.
+    good = [0.5, 0.5] + [0.05] * 18
+    results = [_episode(i, True, good) for i in range(7)]
+    results += [_episode(7 + i, False, [1.0] * 20) for i in range(3)]
+    recov = [3, 5, None, 20]
+    c = cell_statistics("kidnapping", 1.0, results, recov, np.random.default_rng(0))
+    ci = c["ci95"]
+    assert c["success_rate"] == 0.7 and ci["success_rate"] == list(wilson_interval(7, 10))
+    assert ci["collision_rate"] == list(wilson_interval(3, 10))
+    assert c["time_localised"] == pytest.approx(7 * 18 / 200)
+    # Steps of one episode are not independent: the interval is as wide as 10 episodes allow.
+    lo, hi = ci["time_localised"]
+    assert lo < c["time_localised"] < hi and hi - lo > 0.3
+    # Converged steps off by more than 0.3 m: 3 x 20 bad episodes + 7 x 2 bad first frames.
+    assert c["confidently_wrong_rate"] == pytest.approx((60 + 14) / 200)
+    assert ci["confidently_wrong_rate"][0] <= c["confidently_wrong_rate"]
+    # Never localised counts as the episode's length (20): median of 7 x 2 and 3 x 20.
+    assert c["median_frames_to_localised"] == 2.0
+    assert ci["median_frames_to_localised"][0] == 2.0
+    # Recovery: median over the recovered kidnaps, the budget share over all of them.
+    assert c["recovery_frames"] == 5.0 and c["recovered_within_budget"] == 0.5
+    assert ci["recovered_within_budget"] == list(wilson_interval(2, 4))
+    assert 3.0 <= ci["recovery_frames"][0] <= ci["recovery_frames"][1] <= 20.0
+    again = cell_statistics("kidnapping", 1.0, results, recov, np.random.default_rng(0))
+    assert again["ci95"] == ci  # the bootstrap is seeded
+
+
+def test_cell_statistics_without_kidnaps_has_no_recovery_interval():
+    c = cell_statistics("none", 0.0, [_episode(0, True, [0.05] * 5)], [], np.random.default_rng(0))
+    assert c["ci95"]["recovered_within_budget"] is None and c["ci95"]["recovery_frames"] is None
+    assert c["ci95"]["p95_loc_error_m"] == [pytest.approx(0.05)] * 2
 
 
 def test_cell_overrides():
@@ -79,6 +141,9 @@ def test_tiny_matrix_end_to_end_via_cli(capsys, tmp_path):
             "recovery_frames",
         } <= set(c)
         assert 0.0 <= c["success_rate"] <= 1.0
+        lo, hi = c["ci95"]["success_rate"]
+        assert lo <= c["success_rate"] <= hi
+        assert {"confidently_wrong_rate", "median_frames_to_localised"} <= set(c)
     # Every detection dropped: AMCL never gets a fingerprint, so the uniform prior stays spread.
     assert cells[2]["p95_loc_error_m"] > 1.0 and cells[2]["time_localised"] < 0.05
     kid = cells[1]
