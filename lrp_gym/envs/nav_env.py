@@ -75,7 +75,7 @@ class LRPRadarNavEnv(gym.Env):
     ``robot.max_turn_rate_rps``; held for one frame of ``task.frame_period_s``.
 
     **Observation space** (``env.observation.type``, ``n = env.observation.n_waypoints``):
-    ``estimated`` (default) is a float32 vector of ``8 + 2n + 4`` values built from the
+    ``estimated`` (default) is a float32 vector of ``10 + 2n + 4`` values built from the
     estimate only (:class:`~lrp_gym.envs.observations.EstimatedPoseObservation`):
 
     ==========  =====  ==============================================================
@@ -85,14 +85,16 @@ class LRPRadarNavEnv(gym.Env):
     2-3         2      cos, sin of the estimated heading
     4-6         3      std of x, y (m) and heading (rad), capped at 5
     7           1      1.0 once localisation has converged, else 0.0
-    8..8+2n     2n     next n waypoints (dx, dy) in the estimated robot frame (m)
-    8+2n..+2    2      goal (dx, dy) in the estimated robot frame (m)
+    8           1      confidence in [0, 1] (``info["localization_confidence"]``)
+    9           1      1 / ``info["n_modes"]`` (1: one mode; 0: no mode holds 5 %)
+    10..10+2n   2n     next n waypoints (dx, dy) in the estimated robot frame (m)
+    10+2n..+2   2      goal (dx, dy) in the estimated robot frame (m)
     last 2      2      previous action
     ==========  =====  ==============================================================
 
-    ``oracle``: the same layout from the true pose (zero std, converged); ``dict``: the
-    ``estimated`` content as a ``Dict`` space (``pose``, ``pose_std``, ``converged``,
-    ``waypoints``, ``goal``, ``last_action``).
+    ``oracle``: the same layout from the true pose (zero std, converged, confidence 1, one
+    mode); ``dict``: the ``estimated`` content as a ``Dict`` space (``pose``, ``pose_std``,
+    ``converged``, ``confidence``, ``unimodality``, ``waypoints``, ``goal``, ``last_action``).
 
     **Rewards** (weights ``task.rewards``), from the *true* pose: ``progress`` times the
     metres gained along the path (projection searched near the last one, so it cannot jump),
@@ -133,7 +135,10 @@ class LRPRadarNavEnv(gym.Env):
         Shortcut for ``task.mode``.
     render_mode : {"rgb_array", "human"}, optional
 
-    **Version history**: v0, the first and current version.
+    **Version history**: v0, the first and current version. Within v0 the ``estimated``,
+    ``oracle`` and ``dict`` observations gained the localisation confidence and the
+    unimodality (1 / mode count) after the convergence flag (18 -> 20 values with the
+    default three waypoints); models trained on the 18-value layout are refused.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 4}
@@ -386,6 +391,8 @@ class LRPRadarNavEnv(gym.Env):
             est_pose=est.pose,
             est_std=est.std,
             converged=est.converged,
+            confidence=est.confidence,
+            n_modes=est.n_modes,
             true_pose=self.pose,
             path=self._episode_path(),
             s_est_m=self._s_est,

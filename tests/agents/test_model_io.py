@@ -8,6 +8,7 @@ import pickle
 import shutil
 import zipfile
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -50,7 +51,22 @@ def test_shipped_model_has_json_statistics_and_no_pickle():
     assert (MODELS_DIR / "vecnormalize.json").is_file()
     assert not list(MODELS_DIR.glob("*.pkl"))
     doc = model_io.read_stats(MODELS_DIR / "vecnormalize.json")
-    assert doc["norm_obs"] and len(doc["obs_rms"]["mean"]) == 18
+    env = gym.make("LRPRadarNav-v0")
+    assert doc["norm_obs"] and (len(doc["obs_rms"]["mean"]),) == env.observation_space.shape
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ["LRPRadarNav-v0", "LRPRadarNavFast-v0"])
+def test_shipped_model_observation_space_is_the_envs(env_id):
+    """Shape and bounds as saved in the zip (read without unpickling) equal the env's space, so
+    the shipped model sees the current layout (with the confidence and unimodality)."""
+    saved = model_io._box(model_io.read_zip_data(DEFAULT_MODEL)["observation_space"])
+    env = gym.make(env_id)
+    space = env.observation_space
+    env.close()
+    assert saved is not None and saved.shape == space.shape == (20,)
+    np.testing.assert_allclose(saved.low, space.low, atol=1e-5)
+    np.testing.assert_allclose(saved.high, space.high, atol=1e-5)
 
 
 def test_shipped_model_loads_without_unpickling(monkeypatch):
@@ -63,7 +79,7 @@ def test_shipped_model_loads_without_unpickling(monkeypatch):
     monkeypatch.setattr(pickle, "loads", refuse)
     monkeypatch.setattr(pickle, "load", refuse)
     policy = load_ppo()
-    action, _ = policy.predict(np.zeros(18, np.float32))
+    action, _ = policy.predict(np.zeros(20, np.float32))
     assert action.shape == (2,) and np.all(np.abs(action) <= 1.0)
 
 
@@ -98,7 +114,7 @@ def test_statistics_round_trip_exactly(tmp_path):
     path = model_io.write_stats(venv, tmp_path / "vecnormalize.json")
     doc = model_io.read_stats(path)
     norm = model_io.obs_normalizer(doc)
-    obs = np.random.default_rng(0).normal(size=(3, 18)).astype(np.float32)
+    obs = np.random.default_rng(0).normal(size=(3, 20)).astype(np.float32)
     venv.training = False
     np.testing.assert_array_equal(norm.normalize_obs(obs), venv.normalize_obs(obs))
     again = model_io.vecnormalize_from_stats(doc, venv.venv)
@@ -134,11 +150,11 @@ def test_model_for_other_spaces_is_refused(tmp_path):
     path = _copy_shipped(tmp_path)
 
     def other_obs(data):
-        data["observation_space"]["_shape"] = [20]
+        data["observation_space"]["_shape"] = [22]
 
     _rewrite_data(path, other_obs)
     env = make_eval_env("ppo", "LRPRadarNavFast-v0")
-    with pytest.raises(InputError, match=r"observations of shape \(20,\), the env has \(18,\)"):
+    with pytest.raises(InputError, match=r"observations of shape \(22,\), the env has \(20,\)"):
         make_agent("ppo", env, path)
 
     path = _copy_shipped(tmp_path)

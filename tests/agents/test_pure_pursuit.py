@@ -40,6 +40,8 @@ def _obs(pose, path, std=(0.0, 0.0, 0.0), converged=True, last=(0.0, 0.0), otype
         np.asarray(pose, float),
         np.asarray(std, float),
         converged,
+        1.0 if converged else 0.0,
+        1,
         np.asarray(pose, float),
         path,
         s,

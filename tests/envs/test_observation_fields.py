@@ -19,6 +19,8 @@ def test_fields_cover_the_vector_and_hold_the_snapshot(n_waypoints):
         est_pose=np.array([1.5, 1.0, 0.0]),
         est_std=np.array([0.1, 0.2, 0.3]),
         converged=True,
+        confidence=0.75,
+        n_modes=2,
         true_pose=np.array([1.4, 1.1, 0.1]),
         path=path,
         s_est_m=0.5,
@@ -37,10 +39,12 @@ def test_fields_cover_the_vector_and_hold_the_snapshot(n_waypoints):
     np.testing.assert_allclose(vec[f["last_action"]], snap.last_action)
     np.testing.assert_allclose(vec[f["position"]], [1.5 / 6.0, 1.0 / 4.0], rtol=1e-6)
     assert vec[f["converged"]][0] == 1.0
+    assert vec[f["confidence"]][0] == pytest.approx(0.75)
+    assert vec[f["unimodality"]][0] == pytest.approx(0.5)  # two modes
     # The goal (5, 3) seen from (1.5, 1.0) heading 0.
     np.testing.assert_allclose(vec[f["goal"]], [3.5, 2.0], rtol=1e-6)
 
 
 def test_a_length_that_fits_no_layout_is_refused():
     with pytest.raises(ValueError, match="observation"):
-        EstimatedPoseObservation.n_waypoints_of(13)
+        EstimatedPoseObservation.n_waypoints_of(15)

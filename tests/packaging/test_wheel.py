@@ -100,7 +100,7 @@ def test_installed_wheel_works_outside_the_repo(wheel, tmp_path):
     )
     out = _run([str(py), "-c", check], cwd=work, env=env).splitlines()
     assert out[0].startswith(str(site)), out  # the installed wheel, not the checkout
-    assert out[1].startswith(str(site)) and out[2] == "(18,)", out
+    assert out[1].startswith(str(site)) and out[2] == "(20,)", out
     lrp = venv / "bin" / "lrp-gym"
     _run([str(lrp), "demo", "--steps", "3", "--out", str(work / "demo")], cwd=work, env=env)
     assert (work / "demo" / "summary.json").is_file()
