@@ -53,6 +53,7 @@ _IMAGES = np.array(
 _IMAGES = _IMAGES[np.argsort(np.abs(_IMAGES).sum(axis=1), kind="stable")]  # the radar first
 _ORDER = np.abs(_IMAGES).sum(axis=1)
 _FIRST = np.flatnonzero(_ORDER == 1)
+assert np.array_equal(_FIRST, np.arange(1, 6))  # sorted by order: the radar, then its 5 mirrors
 #: Image pairs (a, b) of a retro-directive reflector: same face, or direct and one face.
 _PAIRS_RETRO = np.array([(a, a) for a in _FIRST] + [(0, a) for a in _FIRST])
 #: Image pairs of an omnidirectional reflector: every pair with one or two bounces.
@@ -90,6 +91,7 @@ class GhostModel:
             (np.flatnonzero(omni), _PAIRS_OMNI, False),
         ]
         self._groups = [g for g in self._groups if len(g[0])]
+        self._any_omni = bool(omni.any())
         # The patterns fall monotonically with the incidence angle: "gain >= MIN_PATTERN_GAIN"
         # is "cos(incidence) >= a per-reflector threshold", found once on a fine grid.
         cos_grid = np.cos(np.radians(np.linspace(0.0, 180.0, 3601)))
@@ -107,6 +109,26 @@ class GhostModel:
         nz = _IMAGES[:, 2]
         self._image_z = np.where(odd[:, 2], (nz + 1) * size[2] - h, nz * size[2] + h)
 
+    def _retro_rows(self, idx, dx, dy, dz, dist, visible, rate, out, rates) -> None:
+        """Rows of the retro-directive reflectors ``idx``, in :data:`_PAIRS_RETRO` order (same
+        face out and back, then direct one way), from slices instead of gathered pairs."""
+        n = dist.shape[-1]
+        dtype = dist.dtype.type
+        sl = slice(None) if len(idx) == dist.shape[1] else idx
+        first = slice(1, 1 + len(_FIRST))
+        d0, d1 = dist[0:1, sl], dist[first, sl]
+        vis1 = visible[first, sl]
+        out.append(np.where(vis1, d1, dtype(FAR_M)).reshape(-1, n))
+        # bistatic (direct, face) pairs only within the retro lobe
+        cos_beta = dx[first, sl] * dx[0:1, sl] + dy[first, sl] * dy[0:1, sl]
+        cos_beta += dz[first, sl] * dz[0:1, sl]
+        cos_beta /= d1 * d0
+        ok = vis1 & visible[0:1, sl] & (cos_beta >= dtype(self._cos_beta_min))
+        out.append(np.where(ok, dtype(0.5) * (d0 + d1), dtype(FAR_M)).reshape(-1, n))
+        if rate is not None:
+            rates.append(rate[first, sl].reshape(-1, n))
+            rates.append((dtype(0.5) * (rate[0:1, sl] + rate[first, sl])).reshape(-1, n))
+
     @property
     def count(self) -> int:
         """Rows of :meth:`ranges`."""
@@ -122,16 +144,19 @@ class GhostModel:
         n = len(xy)
         pos = self.positions_m.astype(dtype)
         axes = self.axes.astype(dtype)
-        sign = self._sign.astype(dtype)
+        # Retro-directive reflectors need the radar and its first-order images only.
+        n_img = len(_IMAGES) if self._any_omni else 1 + len(_FIRST)
+        sign = self._sign[:n_img].astype(dtype)
         # Offsets (I, M, N) from each reflector to each image of the radar.
-        dx = (sign[:, None, 0:1] * xy[None, None, :, 0] + self._offset[:, None, 0:1]).astype(
-            dtype
-        ) - pos[None, :, 0:1]
-        dy = (sign[:, None, 1:2] * xy[None, None, :, 1] + self._offset[:, None, 1:2]).astype(
-            dtype
-        ) - pos[None, :, 1:2]
+        offset = self._offset[:n_img]
+        dx = (sign[:, None, 0:1] * xy[None, None, :, 0] + offset[:, None, 0:1]).astype(dtype) - pos[
+            None, :, 0:1
+        ]
+        dy = (sign[:, None, 1:2] * xy[None, None, :, 1] + offset[:, None, 1:2]).astype(dtype) - pos[
+            None, :, 1:2
+        ]
         dz = np.broadcast_to(
-            (self._image_z[:, None] - self.positions_m[None, :, 2]).astype(dtype)[..., None],
+            (self._image_z[:n_img, None] - self.positions_m[None, :, 2]).astype(dtype)[..., None],
             dx.shape,
         )
         dist = np.sqrt(dx * dx + dy * dy + dz * dz)  # (I, M, N)
@@ -149,17 +174,12 @@ class GhostModel:
         far = dtype(FAR_M)
         out, rates = [], []
         for idx, pairs, retro in self._groups:
+            if retro:
+                self._retro_rows(idx, dx, dy, dz, dist, visible, rate, out, rates)
+                continue
             a, b = pairs[:, 0], pairs[:, 1]
             da, db = dist[a][:, idx], dist[b][:, idx]  # (P, M_g, N)
             ok = visible[a][:, idx] & visible[b][:, idx]
-            if retro:
-                # bistatic pairs only within the retro lobe
-                cos_beta = (
-                    dx[a][:, idx] * dx[b][:, idx]
-                    + dy[a][:, idx] * dy[b][:, idx]
-                    + dz[a][:, idx] * dz[b][:, idx]
-                ) / (da * db)
-                ok &= (a == b)[:, None, None] | (cos_beta >= dtype(self._cos_beta_min))
             out.append(np.where(ok, dtype(0.5) * (da + db), far).reshape(-1, n))
             if rate is not None:
                 rates.append((dtype(0.5) * (rate[a][:, idx] + rate[b][:, idx])).reshape(-1, n))
