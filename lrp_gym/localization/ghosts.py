@@ -172,7 +172,8 @@ class GhostModel:
             )
             rate /= dist
         far = dtype(FAR_M)
-        out, rates = [], []
+        out: list[np.ndarray] = []
+        rates: list[np.ndarray] = []
         for idx, pairs, retro in self._groups:
             if retro:
                 self._retro_rows(idx, dx, dy, dz, dist, visible, rate, out, rates)
