@@ -181,6 +181,7 @@ class FingerprintModel:
             if room is not None and self.ghost_probability > 0.0
             else None
         )
+        self._extra_weights = self._map_return_weights()
         self.type_names = layout.type_names
         self._xy = []
         self._dz2 = []
@@ -274,7 +275,7 @@ class FingerprintModel:
         dv += dtype(q * self.velocity_density)
         return dv
 
-    def _map_return_weights(self, dtype) -> np.ndarray | None:
+    def _map_return_weights(self) -> np.ndarray | None:
         """Mixture weight (K,) of each return of :meth:`_map_returns`; None without any."""
         parts = []
         if self.structure_probability > 0.0:
@@ -283,7 +284,7 @@ class FingerprintModel:
             )
         if self.ghosts is not None:
             parts.append(np.full(self.ghosts.count, self.ghost_probability / self.ghosts.count))
-        return np.concatenate(parts).astype(dtype) if parts else None
+        return np.concatenate(parts) if parts else None
 
     def _map_returns(
         self, xy: np.ndarray, velocity_xy: np.ndarray | None, dtype
@@ -310,12 +311,21 @@ class FingerprintModel:
             return r, None
         return r, (np.concatenate(rates) if len(rates) > 1 else rates[0])
 
+    def map_return_ranges(self, xy: np.ndarray, dtype=np.float32) -> np.ndarray | None:
+        """Ranges (K, N) of the map-predicted non-reflector returns at positions (N, 2), to
+        pass as ``map_ranges`` to :meth:`log_likelihood` for positions that do not move (a
+        fixed grid); None when the model predicts none."""
+        if self._extra_weights is None:
+            return None
+        return self._map_returns(xy, None, dtype)[0]
+
     def log_likelihood(
         self,
         xy: np.ndarray,
         fingerprint: Fingerprint,
         dtype=np.float32,
         velocity_xy: np.ndarray | None = None,
+        map_ranges: np.ndarray | None = None,
     ) -> np.ndarray:
         """Log-likelihood (N,) float64 of ``fingerprint`` at each position of ``xy`` (N, 2).
 
@@ -324,7 +334,9 @@ class FingerprintModel:
         of each position's robot over the floor, adds the Doppler term when the model has a
         ``doppler_std_mps`` and the fingerprint carries velocities. The per-particle arithmetic runs in
         ``dtype`` (float32 by default: SIMD ``exp`` is several times faster, and distances in a
-        room keep sub-micrometre precision); the per-type sums are float64.
+        room keep sub-micrometre precision); the per-type sums are float64. ``map_ranges``,
+        :meth:`map_return_ranges` of ``xy``, saves recomputing them where the Doppler term does
+        not apply (else they are computed with their velocities).
         """
         n_pos = xy.shape[0]
         out = np.zeros(n_pos)
@@ -333,11 +345,13 @@ class FingerprintModel:
         c = self.clutter_probability
         s_prob = self.structure_probability
         gh_prob = self.ghost_probability
-        extra_w = self._map_return_weights(dtype)
+        extra_w = self._extra_weights
         measured_v = fingerprint.velocities_mps
         # The robot's velocity when the Doppler term applies, else None.
         doppler_xy = velocity_xy if self.doppler_std_mps > 0.0 and measured_v is not None else None
         doppler = doppler_xy is not None
+        if map_ranges is not None and not doppler:
+            extra = map_ranges.astype(dtype, copy=False)
         velocities: tuple[np.ndarray | None, ...] = (
             measured_v
             if doppler and measured_v is not None

@@ -55,6 +55,8 @@ class MeasurementGrid:
         self.cell_xy_m = np.array([size_xy_m[0] / nx, size_xy_m[1] / ny])
         self.centres_m = xy[free(xy)]
         self._free = free
+        self._map_model: FingerprintModel | None = None
+        self._map_ranges: list[np.ndarray | None] = []
 
     def __len__(self) -> int:
         return len(self.centres_m)
@@ -63,10 +65,15 @@ class MeasurementGrid:
         """Heading-free log-likelihood (C,) of the frame at every free cell centre (in chunks:
         the model's work arrays grow with detections x reflectors x positions)."""
         xy = self.centres_m
+        chunks = range(0, len(xy), _CHUNK)
+        if self._map_model is not model:
+            # The cells do not move: the map's predicted returns there are computed once.
+            self._map_model = model
+            self._map_ranges = [model.map_return_ranges(xy[i : i + _CHUNK]) for i in chunks]
         return np.concatenate(
             [
-                model.log_likelihood(xy[i : i + _CHUNK], fingerprint)
-                for i in range(0, len(xy), _CHUNK)
+                model.log_likelihood(xy[i : i + _CHUNK], fingerprint, map_ranges=ranges)
+                for i, ranges in zip(chunks, self._map_ranges, strict=True)
             ]
             or [np.zeros(0)]
         )
