@@ -24,7 +24,6 @@ ALLOWED: dict[str, str] = {
     "lrp_gym/commands/reproduce_paper.py::reproduce_paper": "typer command: the signature is its option table (one Annotated parameter per flag) (43 signature lines); TODO split the body",
     "lrp_gym/commands/robustness.py::robustness": "typer command: the signature is its option table (one Annotated parameter per flag) (being changed on another branch)",
     "lrp_gym/commands/train.py::train": "typer command: the signature is its option table (one Annotated parameter per flag) (53 signature lines, body ~30)",
-    "lrp_gym/envs/nav_env.py": "412 lines of which the Gymnasium-style class docstring (spaces, rewards, episode end) is 72",
     "lrp_gym/envs/rendering.py::Renderer.draw": "TODO(issue 15): one frame drawn layer by layer; split",
     "lrp_gym/experiments/robustness.py::run_matrix": "being changed on another branch (robustness)",
     "lrp_gym/localization/amcl.py": "TODO(issue 15): 402 lines; move the lost test out",
