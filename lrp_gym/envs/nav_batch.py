@@ -227,7 +227,7 @@ class NavBatch:
         )
         k, s = track.shape[:2]
         free = self.world.room.free(track[..., :2].reshape(-1, 2), self.radius_m).reshape(k, s)
-        collided = ~free.all(axis=1)
+        collided: np.ndarray = ~free.all(axis=1)
         last_free = np.where(collided, np.argmin(free, axis=1) - 1, s - 1)
         stays = last_free < 0  # the first sub-step already collides
         new_pose = np.where(stays[:, None], pose, track[np.arange(k), np.maximum(last_free, 0)])
@@ -324,3 +324,49 @@ class NavBatch:
             "is_success": bool(reached),
             "rewards": {name: float(v) for name, v in zip(REWARD_TERMS, terms, strict=True)},
         }
+
+
+class RobotView:
+    """One robot of a batch as the renderer and inspection tools read an env: its pose,
+    path, estimate, stack stages and last frame (read-only)."""
+
+    def __init__(self, batch: NavBatch, i: int) -> None:
+        self.world = batch.world
+        self.cfg = batch.cfg
+        self._batch, self._i = batch, i
+
+    @property
+    def pose(self) -> np.ndarray:
+        return self._batch.pose[self._i].copy()
+
+    @property
+    def path(self) -> WaypointPath | None:
+        return self._batch.paths[self._i]
+
+    @property
+    def estimate(self) -> PoseEstimate | None:
+        return self._batch.estimates[self._i]
+
+    @property
+    def stack(self) -> LocalizationStack:
+        return self._batch.stacks[self._i]
+
+    @property
+    def localizer(self) -> Any:
+        return self.stack.localizer
+
+    @property
+    def frame(self) -> FrameResult | None:
+        return self._batch.frames[self._i]
+
+    @property
+    def detections(self) -> Any:
+        return None if self.frame is None else self.frame.detections
+
+    @property
+    def fingerprint(self) -> Any:
+        return None if self.frame is None else self.frame.fingerprint
+
+    @property
+    def _steps(self) -> int:
+        return int(self._batch.steps[self._i])
