@@ -227,7 +227,7 @@ class NavBatch:
         )
         k, s = track.shape[:2]
         free = self.world.room.free(track[..., :2].reshape(-1, 2), self.radius_m).reshape(k, s)
-        collided: np.ndarray = ~free.all(axis=1)
+        collided = ~np.all(free, axis=1, keepdims=False).astype(bool)
         last_free = np.where(collided, np.argmin(free, axis=1) - 1, s - 1)
         stays = last_free < 0  # the first sub-step already collides
         new_pose = np.where(stays[:, None], pose, track[np.arange(k), np.maximum(last_free, 0)])
