@@ -164,7 +164,11 @@ def reproduce_paper(
         rooms_over = deep_merge(parse_sets(sets, scenario), {"radar": {"noise": noise}})
         if particles is not None:
             rooms_over = deep_merge(rooms_over, _particles(particles, 200))
-        _random_rooms(random_rooms, runs, seed, rooms_over, estimator, out_path, json_out)
+        if parse_sets(sets, scenario).get("localization", {}).get("method") == "grid":
+            localizer = "grid"
+        _random_rooms(
+            random_rooms, runs, seed, rooms_over, estimator, out_path, json_out, localizer
+        )
         return
     cfg = load_config(scenario, sets, fidelity)
     over: dict = {"radar": {"noise": noise}}
@@ -264,22 +268,36 @@ def _particles(n: int, min_particles: int) -> dict:
 
 
 def _random_rooms(
-    n: int, runs: int, seed: int, over: dict, estimator: str, json_path, json_out: bool
+    n: int,
+    runs: int,
+    seed: int,
+    over: dict,
+    estimator: str,
+    json_path,
+    json_out: bool,
+    localizer: str = "amcl",
 ) -> None:
     """``--random-rooms``: the generated-room baseline, one line per room as it finishes
     (on stderr; with ``--json`` the summary goes to stdout as JSON instead of the table)."""
     from lrp_gym.experiments.rooms import summary, sweep
 
     def progress(r) -> None:
+        grid = "" if r.grid_radar_m is None else f", grid filter {r.grid_radar_m:.3f} m"
         err_console.print(
             f"room {r.seed}: {r.size_m[0]:.1f} x {r.size_m[1]:.1f} m, {r.obstacles} obstacles, "
             f"{r.reflectors} reflectors ({r.kinds}), {r.frames} frames: AMCL "
-            f"{r.amcl_radar_m:.3f} m (true fingerprints {r.amcl_true_m:.3f} m)",
+            f"{r.amcl_radar_m:.3f} m (true fingerprints {r.amcl_true_m:.3f} m){grid}",
             highlight=False,
         )
 
     results = sweep(
-        range(n), runs=runs, run_seed=seed, overrides=over, estimator=estimator, progress=progress
+        range(n),
+        runs=runs,
+        run_seed=seed,
+        overrides=over,
+        estimator=estimator,
+        progress=progress,
+        localizer=localizer,
     )
     data = summary(results)
     if json_path:
