@@ -307,8 +307,14 @@ def _random_rooms(
         if json_path:
             wrote(json_path, quiet=True)
         return
+    _print_rooms(results, data, runs)
+    if json_path:
+        wrote(json_path)
+
+
+def _print_rooms(results, data: dict, runs: int) -> None:
     t = table(
-        f"AMCL mean error on {n} generated rooms ({runs} runs each)",
+        f"AMCL mean error on {len(results)} generated rooms ({runs} runs each)",
         ("room", "size [m]", "obst.", "refl.", "kinds", "frames", "radar [m]", "true fp [m]"),
     )
     for r in results:
@@ -328,8 +334,6 @@ def _random_rooms(
         f"{data['median_amcl_true_m']:.3f} m with true fingerprints",
         highlight=False,
     )
-    if json_path:
-        wrote(json_path)
 
 
 def register(app: typer.Typer) -> None:

@@ -19,7 +19,11 @@ from lrp_gym.config.base import (
     Vec2,
     Vec3,
 )
-from lrp_gym.config.localization import LocalizationConfig, MotionNoiseConfig
+from lrp_gym.config.localization import (
+    LocalizationConfig,
+    MotionNoiseConfig,
+    ReflectorMonitorConfig,
+)
 from lrp_gym.config.perturbations import (
     ClutterConfig,
     DisplacedReflectorConfig,
@@ -76,6 +80,7 @@ __all__ = [
     "InterferenceConfig",
     "KidnappingConfig",
     "LocalizationConfig",
+    "ReflectorMonitorConfig",
     "MAX_ROOM_SIDE_M",
     "MissedDetectionsConfig",
     "MotionNoiseConfig",

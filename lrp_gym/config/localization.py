@@ -21,6 +21,42 @@ class MotionNoiseConfig(Strict):
     alphas: Annotated[list[NonNegFloat], Field(min_length=4, max_length=4)] = [0.0, 0.0, 0.0, 0.0]
 
 
+class ReflectorMonitorConfig(Strict):
+    """Which mapped reflector is missing or moved (lrp_gym.localization.reflector_monitor)."""
+
+    enabled: bool = True
+    drop_suspects: bool = Field(
+        default=True,
+        description="leave suspected reflectors out of the localiser's measurement model",
+    )
+    window_frames: Annotated[int, Field(ge=1, le=10_000)] = 30
+    min_visible_frames: Annotated[int, Field(ge=1, le=10_000)] = 12
+    suspect_share: Annotated[float, Field(gt=0.0, le=1.0)] = 0.25
+    clear_share: Fraction = 0.1
+    gate_sigmas: PositiveFloat = 3.0
+    range_std_m: PositiveFloat = Field(
+        default=0.035,
+        description="std of a reflector's distance from a converged estimate (radar range "
+        "noise, about 2.6 cm, and the estimate's error; not the localiser's inflated "
+        "measurement_std_m): ghosts and room returns crowd the reflector band, so the gate "
+        "must be as tight as the radar allows",
+    )
+    min_gain: Fraction = Field(
+        default=0.25,
+        description="share of its peak RCS a reflector must show the radar to count as visible",
+    )
+
+    @model_validator(mode="after")
+    def _hysteresis(self) -> ReflectorMonitorConfig:
+        if not self.clear_share < self.suspect_share:
+            raise PydanticCustomError(
+                "hysteresis",
+                "clear_share ({a}) must be below suspect_share ({b})",
+                {"a": self.clear_share, "b": self.suspect_share},
+            )
+        return self
+
+
 class LocalizationConfig(Strict):
     method: Literal["amcl", "lut", "grid"] = "amcl"
     lut_resolution_m: PositiveFloat = 0.075
@@ -96,6 +132,7 @@ class LocalizationConfig(Strict):
     init_std: Vec3 = [0.3, 0.3, 0.35]
     converged_std_m: PositiveFloat = 0.25
     converged_mass: Annotated[float, Field(gt=0.0, le=1.0)] = 0.9
+    reflector_monitor: ReflectorMonitorConfig = ReflectorMonitorConfig()
 
     @model_validator(mode="after")
     def _counts(self) -> LocalizationConfig:

@@ -318,6 +318,7 @@ class NavBatch:
             "converged": bool(est.converged),
             "localization_confidence": float(est.confidence),
             "n_modes": int(est.n_modes),
+            "suspect_reflectors": () if frame is None else frame.suspect_reflectors,
             "progress_m": float(self.s_true_m[i]),
             "path_length_m": self.path(i).length_m,
             "collision": bool(collided),

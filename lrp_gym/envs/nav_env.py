@@ -112,7 +112,9 @@ class LRPRadarNavEnv(gym.Env):
     still adds gymnasium's ``TimeLimit`` on top.
 
     **Info**: true and estimated pose, position and heading errors, pose std, particles, ESS,
-    detections, convergence, confidence, modes, progress, path length, ``collision``,
+    detections, convergence, confidence, modes, ``suspect_reflectors`` (layout indices of the
+    reflectors the localiser believes moved or missing, see
+    :mod:`~lrp_gym.localization.reflector_monitor`), progress, path length, ``collision``,
     ``is_success`` and the reward terms.
 
     Parameters

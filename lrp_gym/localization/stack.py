@@ -10,12 +10,12 @@ The order depends on what the localiser weighs (``localization.measurements``):
   detections that pass a reflector type's RCS/range window; its posterior of *this* frame then
   tells the tracker which track is which reflector (map-aided identification);
 - ``tracks``: the tracker runs first, identified by the localiser's cloud of the *previous*
-  frame moved by the odometry (the localiser has not seen this frame yet, so the tracker's
-  output is not built from its own detections fed back), then the localiser weighs the
-  tracker's fingerprint.
+  frame moved by the odometry (so its output is not built from its own detections fed
+  back), then the localiser weighs the tracker's fingerprint.
 
-The look-up table, when there is one, positions the tracker's fingerprint; it knows no
-heading, so the stack's pose estimate is then the table's position with the localiser's heading.
+The look-up table, when there is one, positions the tracker's fingerprint (no heading: the
+localiser's completes it). Last, the reflector monitor checks every mapped reflector against
+the estimate and may take suspects out of the localiser's map (``reflector_monitor.py``).
 """
 
 from __future__ import annotations
@@ -29,8 +29,10 @@ import numpy as np
 
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.localization.factory import Localizer, make_localizer
+from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.lut import LookupTable
 from lrp_gym.localization.pose_estimate import PoseEstimate
+from lrp_gym.localization.reflector_monitor import ReflectorMonitor, model_without
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
@@ -66,6 +68,9 @@ class FrameResult:
         with the localiser's heading.
     elapsed_s : dict
         Wall time of the stages run in this frame: ``radar``, ``tracking_localization``, ``lut``.
+    suspect_reflectors : tuple of int
+        Layout indices of the reflectors the reflector monitor suspects of being moved or
+        missing (:mod:`~lrp_gym.localization.reflector_monitor`); empty without a monitor.
     """
 
     detections: Detections | None
@@ -74,6 +79,7 @@ class FrameResult:
     lut_estimate: PoseEstimate | None
     estimate: PoseEstimate
     elapsed_s: dict[str, float] = field(default_factory=dict, compare=False)
+    suspect_reflectors: tuple[int, ...] = ()
 
 
 class LocalizationStack:
@@ -109,7 +115,8 @@ class LocalizationStack:
       grid filter), its recovery averages and the predicted cloud of its last update;
     - :attr:`converged`, whether the localiser's estimate of the previous frame had converged
       (with ``tracks`` it decides whether the cloud may rank the tracks or only veto them);
-    - :attr:`sensor`, the radar of this episode (the surveyed layout, or a moved one).
+    - :attr:`sensor`, the radar of this episode (the surveyed layout, or a moved one);
+    - the reflector monitor's statistics, and which map (without suspects) the localiser uses.
 
     Everything else (world, configuration, look-up table, the surveyed sensor) is shared and
     read-only. No state is keyed on the identity of an input object: every value a stage
@@ -128,6 +135,7 @@ class LocalizationStack:
         measurements: str = "detections",
         map_aided: bool = True,
         use_ego: bool = True,
+        monitor: ReflectorMonitor | None = None,
     ) -> None:
         if measurements not in ("detections", "tracks"):
             raise ValueError(
@@ -146,6 +154,10 @@ class LocalizationStack:
         self.map_aided = map_aided
         self.use_ego = use_ego
         self.converged = False
+        self.monitor = monitor
+        # The localiser's model of the surveyed map, and the models without suspected
+        # reflectors (keyed by the suspects; shared by spawned stacks: they are read-only).
+        self._models: dict[tuple[int, ...], FingerprintModel] = {(): localizer.model}
 
     @classmethod
     def from_config(
@@ -168,32 +180,38 @@ class LocalizationStack:
             if loc.method == "lut"
             else None
         )
+        tracker = LrpTracker.from_world(world, cfg.tracking)
+        monitor = None
+        if loc.reflector_monitor.enabled:
+            max_range_m = float(tracker.classifier.max_range_m)
+            monitor = ReflectorMonitor(world, loc.reflector_monitor, max_range_m)
         return cls(
             world,
             RadarSensor(world, cfg.radar),
-            LrpTracker.from_world(world, cfg.tracking),
+            tracker,
             make_localizer(world, loc),
             lut,
             dt_s=cfg.task.frame_period_s,
             measurements=loc.measurements,
             map_aided=map_aided,
             use_ego=use_ego,
+            monitor=monitor,
         )
 
     def spawn(self) -> LocalizationStack:
-        """Another robot's stack on the same map (a batch of robots has one each).
-
-        The read-only parts are shared: world, radar model (channel, processor, CFAR), the
-        localiser's measurement model and likelihood grids, the look-up table. The per-robot
-        state listed in the class notes is the new stack's own; :meth:`reset` it before use.
-        """
+        """Another robot's stack on the same map: the read-only parts shared (world, radar
+        model, measurement models, grids, look-up table), the per-robot state of the class
+        notes its own (:meth:`reset` it before use)."""
         new = copy.copy(self)
         # A shallow copy: the radar's per-frame attributes (last paths) are then its own.
         new.surveyed_sensor = new.sensor = copy.copy(self.surveyed_sensor)
         new.tracker = copy.copy(self.tracker)
         new.tracker.reset()
         new.localizer = self.localizer.spawn()
+        new.localizer.model = self._models[()]
         new.converged = False
+        if self.monitor is not None:
+            new.monitor = replace(self.monitor)  # fresh statistics (see __post_init__)
         return new
 
     # ------------------------------------------------------------------ per-robot state
@@ -209,9 +227,12 @@ class LocalizationStack:
             the cloud over the room (global localisation).
         """
         self.tracker.reset()
+        self.localizer.model = self._models[()]
         self.localizer.reset(rng, known_pose)
         self.converged = False
         self.sensor = self.surveyed_sensor
+        if self.monitor is not None:
+            self.monitor.reset()
 
     def set_radar_layout(self, layout: ReflectorLayout) -> None:
         """Let the radar see ``layout`` until the next :meth:`reset`; the map stays surveyed.
@@ -297,10 +318,26 @@ class LocalizationStack:
             detections = frame
             fingerprint, estimate = self._track_and_localize(frame, ego, rng)
         self.converged = bool(estimate.converged)
+        suspects = self._check_reflectors(estimate) if detections is not None else ()
         t1 = time.perf_counter()
         lut_estimate, pose_estimate = self._with_lut(fingerprint, estimate)
         elapsed = {"tracking_localization": t1 - t0, "lut": time.perf_counter() - t1}
-        return FrameResult(detections, fingerprint, estimate, lut_estimate, pose_estimate, elapsed)
+        return FrameResult(
+            detections, fingerprint, estimate, lut_estimate, pose_estimate, elapsed, suspects
+        )
+
+    def _check_reflectors(self, estimate: PoseEstimate) -> tuple[int, ...]:
+        """Feed the reflector monitor this frame's gated detections; when its suspects change
+        (and ``drop_suspects``), the localiser gets the map without them."""
+        monitor = self.monitor
+        if monitor is None:
+            return ()
+        if monitor.update(estimate, self.tracker.gated_fingerprint()) and monitor.cfg.drop_suspects:
+            key = monitor.suspects
+            if key not in self._models:
+                self._models[key] = model_without(self.world, self.localizer.cfg, key)
+            self.localizer.model = self._models[key]
+        return monitor.suspects
 
     # ------------------------------------------------------------------ internals
     def _with_lut(

@@ -1,0 +1,132 @@
+"""The reflector monitor names a moved or missing reflector and nothing else."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import lrp_gym  # noqa: F401  (registers the envs)
+from agents.pure_pursuit import PurePursuitPolicy
+from lrp_gym.config import ReflectorMonitorConfig, load_scenario
+from lrp_gym.localization.pose_estimate import PoseEstimate
+from lrp_gym.localization.reflector_monitor import ReflectorMonitor
+from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.world import World
+
+CFG = ReflectorMonitorConfig()
+
+
+@pytest.fixture(scope="module")
+def world():
+    return World.from_config(load_scenario("ipin2023"))
+
+
+def _estimate(xy, converged=True):
+    return PoseEstimate(np.array([*xy, 0.0]), np.eye(3) * 1e-4, 500, 400.0, converged, 1.0, 1)
+
+
+def _gated(world, xy, drop=()):
+    """This frame's reflector-window distances: every reflector's true distance but ``drop``."""
+    d = world.layout.distances_m(world.radar_position(np.asarray(xy)))
+    keep = np.setdiff1d(np.arange(len(d)), drop)
+    return Fingerprint.from_distances(world.layout.type_names, [d[keep]], 0.03)
+
+
+def _visible_xy(world, monitor, rng):
+    """A free position from which every reflector counts (visible and resolvable)."""
+    for _ in range(1000):
+        xy = rng.uniform(0.5, 1.0, 2) * world.room.size_m[:2] * 0.9
+        d = world.layout.distances_m(world.radar_position(xy))
+        gap = np.abs(d[:, None] - d[None, :]) + np.eye(len(d)) * 9
+        if monitor.visible(xy).all() and gap.min() >= 2 * world.fmcw.range_resolution_m:
+            return xy
+    raise AssertionError("no position sees every reflector")
+
+
+def test_a_reflector_that_stops_answering_is_named_and_cleared_when_it_returns(world):
+    mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+    rng = np.random.default_rng(0)
+    xy = _visible_xy(world, mon, rng)
+    for _ in range(30):
+        assert not mon.update(_estimate(xy), _gated(world, xy))
+    assert mon.suspects == ()
+    changed_at = None
+    for k in range(CFG.window_frames):
+        if mon.update(_estimate(xy), _gated(world, xy, drop=[2])):
+            changed_at = k + 1
+            break
+    assert mon.suspects == (2,)
+    # Named as soon as its miss share passes the threshold (EWMA over ~window_frames).
+    assert changed_at is not None and changed_at <= 12
+    for _ in range(3 * CFG.window_frames):
+        mon.update(_estimate(xy), _gated(world, xy))
+    assert mon.suspects == ()
+    mon.update(_estimate(xy), _gated(world, xy, drop=[2]))
+    mon.reset()
+    assert mon.suspects == () and not mon.visible_frames.any()
+
+
+def test_frames_without_a_converged_estimate_are_not_judged(world):
+    mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+    xy = _visible_xy(world, mon, np.random.default_rng(1))
+    for _ in range(50):
+        mon.update(_estimate(xy, converged=False), _gated(world, xy, drop=[0, 1, 2, 3]))
+    assert mon.suspects == () and not mon.visible_frames.any()
+
+
+def test_out_of_range_reflectors_are_not_expected(world):
+    mon = ReflectorMonitor(world, CFG, max_range_m=0.5)
+    xy = np.asarray(world.room.size_m[:2]) / 2
+    assert not mon.visible(xy).any()
+    for _ in range(40):
+        mon.update(_estimate(xy), _gated(world, xy, drop=[0, 1, 2, 3]))
+    assert mon.suspects == ()
+
+
+def test_hysteresis_is_validated():
+    with pytest.raises(ValueError, match="clear_share"):
+        ReflectorMonitorConfig(suspect_share=0.2, clear_share=0.3)
+
+
+def _patrol(overrides, seed, frames=40):
+    env = gym.make("LRPRadarNavFast-v0", scenario="ipin2023-patrol", overrides=overrides)
+    policy = PurePursuitPolicy.from_env(env)
+    obs, _ = env.reset(seed=seed)
+    named = {}
+    for t in range(1, frames + 1):
+        obs, _, terminated, truncated, info = env.step(policy.act(obs))
+        for j in info["suspect_reflectors"]:
+            named.setdefault(j, t)
+        if terminated or truncated:
+            break
+    return env.unwrapped, named
+
+
+def test_a_moved_reflector_is_named_on_the_patrol_and_left_out_of_the_map():
+    over = {"perturbations": {"displaced_reflector": {"severity": 0.5}}}
+    hits = 0
+    for seed in range(3):
+        env, named = _patrol(over, seed)
+        moved = set(env.perturbations["displaced_reflector"].moved.tolist())
+        hits += bool(moved & set(named))
+        assert set(named) <= moved  # nothing else named
+        if moved & set(named):
+            # The localiser weighs the three others only.
+            assert sum(env.localizer.model.counts) == len(env.world.layout) - 1
+    assert hits >= 2
+
+
+def test_a_vanished_reflector_is_named():
+    over = {
+        "perturbations": {"shadowing": {"mode": "static", "frames": 1000, "start_frames": [1, 1]}}
+    }
+    env, named = _patrol(over, seed=0)
+    assert set(named) == set(env.perturbations["shadowing"].targets.tolist())
+
+
+def test_nothing_is_named_in_the_surveyed_room():
+    for seed in range(3):
+        env, named = _patrol({}, seed, frames=80)
+        assert named == {}
+        assert sum(env.localizer.model.counts) == len(env.world.layout)
