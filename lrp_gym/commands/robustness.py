@@ -200,6 +200,8 @@ def _frames(v: float | None, ci: list[float] | None) -> str:
 
 
 def _print(result: dict, budget: int) -> None:
+    from lrp_gym.experiments.robustness import SUSPECT_BUDGET_FRAMES
+
     e, s = result["episodes"], result["seed"]
     # Each cell: the value over its 95 % interval. Two-line headers, no vertical rules, lengths
     # in cm, the severity under the name: the nine columns fit 80 columns unfolded (p50 is in
@@ -237,6 +239,17 @@ def _print(result: dict, budget: int) -> None:
         f"<= {budget}: kidnaps recovered within {budget} frames.",
         highlight=False,
     )
+    for c in result["cells"]:
+        if c.get("suspect_named_within_budget") is None:
+            continue
+        lo, hi = (c.get("ci95") or {}).get("suspect_named_within_budget") or (0.0, 1.0)
+        console.print(
+            f"{c['perturbation']} {c['severity']:g}: the moved or vanished reflector named "
+            f"within {SUSPECT_BUDGET_FRAMES} frames in {100 * c['suspect_named_within_budget']:.0f} "
+            f"% of episodes ({100 * lo:.0f}-{100 * hi:.0f} %); another one named in "
+            f"{100 * c['false_suspect_rate']:.0f} %",
+            highlight=False,
+        )
 
 
 def register(app: typer.Typer) -> None:

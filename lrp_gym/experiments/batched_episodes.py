@@ -17,7 +17,7 @@ from gymnasium.utils import seeding
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.envs.nav_batch import NavBatch
 from lrp_gym.envs.nav_env import check_action
-from lrp_gym.experiments.episodes import EpisodeRecorder, EpisodeResult, Policy, kidnap_frame
+from lrp_gym.experiments.episodes import EpisodeRecorder, EpisodeResult, Policy
 
 
 def run_batched(
@@ -66,7 +66,7 @@ def run_batched(
             record.add(float(out.reward[k]), info)
             obs[j] = batch.observe(int(j))
             if out.terminated[k] or out.truncated[k]:
-                done[record.seed] = record.result(kidnap_frame(batch.perturbations[j]))
+                done[record.seed] = record.result(batch.perturbations[j])
                 if progress is not None:
                     progress(done[record.seed])
                 recorders[j] = None

@@ -22,7 +22,9 @@ import lrp_gym.envs  # noqa: F401  (registers the env ids)
 from lrp_gym.envs.nav_env import LRPRadarNavEnv
 from lrp_gym.localization.metrics import trust_metrics
 from lrp_gym.perturbations import PerturbationSet
+from lrp_gym.perturbations.layout import DisplacedReflector
 from lrp_gym.perturbations.robot_motion import Kidnapping
+from lrp_gym.perturbations.sensing import Shadowing
 
 DEFAULT_ENV = "LRPRadarNav-v0"
 ORACLE_ENV = "LRPRadarNavOracle-v0"
@@ -102,6 +104,10 @@ class EpisodeResult:
     waypoints_m: np.ndarray = field(repr=False)
     confidence: np.ndarray | None = field(default=None, repr=False)
     kidnap_frame: int | None = None  # the frame a kidnapping perturbation moved the robot
+    #: Reflectors a perturbation moved or hid for good, and the first frame each reflector
+    #: was named in ``info["suspect_reflectors"]``.
+    perturbed_reflectors: tuple[int, ...] = ()
+    suspect_first_frame: dict[int, int] = field(default_factory=dict, repr=False)
 
     def row(self) -> dict[str, Any]:
         """Scalar summary of the episode (JSON-friendly)."""
@@ -142,6 +148,7 @@ class EpisodeRecorder:
         self.converged: list[bool] = []
         self.confidence: list[float] = []
         self.episode_return, self.collision, self.success, self.steps = 0.0, False, False, 0
+        self.suspect_first_frame: dict[int, int] = {}
 
     def add(self, reward: float, info: dict[str, Any]) -> None:
         """One step's reward and info."""
@@ -154,9 +161,12 @@ class EpisodeRecorder:
         self.confidence.append(info.get("localization_confidence", float(info["converged"])))
         self.collision |= bool(info["collision"])
         self.success |= bool(info["is_success"])
+        for j in info.get("suspect_reflectors", ()):
+            self.suspect_first_frame.setdefault(int(j), self.steps)
 
-    def result(self, kidnap: int | None = None) -> EpisodeResult:
-        """The episode's result (``kidnap``: the frame of a kidnapping, if one happened)."""
+    def result(self, perturbations: PerturbationSet | None = None) -> EpisodeResult:
+        """The episode's result; ``perturbations``, the episode's, tell the frame of a
+        kidnapping and which reflectors were moved or hidden for good."""
         txy = np.asarray(self.true_xy)
         return EpisodeResult(
             seed=self.seed,
@@ -173,7 +183,9 @@ class EpisodeRecorder:
             true_xy=txy,
             est_xy=np.asarray(self.est_xy),
             waypoints_m=self.waypoints_m,
-            kidnap_frame=kidnap,
+            kidnap_frame=kidnap_frame(perturbations),
+            perturbed_reflectors=perturbed_reflectors(perturbations),
+            suspect_first_frame=dict(self.suspect_first_frame),
         )
 
 
@@ -196,7 +208,7 @@ def run_episode(
         record.add(float(reward), info)
         if frames is not None:
             frames.append(_frame(env))
-    return record.result(kidnap_frame(base.perturbations))
+    return record.result(base.perturbations)
 
 
 def summarize(results: list[EpisodeResult]) -> dict[str, Any]:
@@ -311,6 +323,21 @@ def kidnap_frame(perturbations: PerturbationSet | None) -> int | None:
     """The frame of this episode's kidnapping, if one happened."""
     kid = perturbations.get("kidnapping") if perturbations is not None else None
     return kid.kidnap_frame if isinstance(kid, Kidnapping) else None
+
+
+def perturbed_reflectors(perturbations: PerturbationSet | None) -> tuple[int, ...]:
+    """Reflectors this episode's perturbations moved (displaced reflector) or hid until the
+    episode's end (static shadowing longer than any episode): the ones a monitor should name."""
+    if perturbations is None:
+        return ()
+    out: set[int] = set()
+    moved = perturbations.get("displaced_reflector")
+    if isinstance(moved, DisplacedReflector):
+        out |= {int(j) for j in moved.moved}
+    hidden = perturbations.get("shadowing")
+    if isinstance(hidden, Shadowing) and hidden.cfg.mode == "static" and hidden.frames >= 1000:
+        out |= {int(j) for j in hidden.targets}
+    return tuple(sorted(out))
 
 
 def write_gif(frames: list[np.ndarray], path: str | Path, fps: float = 4.0) -> Path:

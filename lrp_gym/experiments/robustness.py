@@ -45,6 +45,8 @@ from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M, frames_to_localise
 
 LOCALISED_M = metrics.LOCALISED_M
 RECOVERY_BUDGET_FRAMES = 15
+#: Frames within which a moved or vanished reflector should be named a suspect.
+SUSPECT_BUDGET_FRAMES = 40
 DEFAULT_ENV = "LRPRadarNavFast-v0"
 DEFAULT_SEVERITIES = (0.25, 0.5, 1.0)
 #: Episodes per cell by default: a 95 % Wilson interval at 100 % success is then 93-100 %.
@@ -143,6 +145,18 @@ def cell_statistics(
     wrong = [r.loc_error_m[r.converged] > CONFIDENTLY_WRONG_M for r in results]
     n_succ = sum(bool(r.success) for r in results)
     n_coll = sum(bool(r.collision) for r in results)
+    # Reflector monitor: a perturbed reflector named within the budget; any other one named.
+    perturbed = [r for r in results if r.perturbed_reflectors]
+    named = sum(
+        any(
+            r.suspect_first_frame.get(j, SUSPECT_BUDGET_FRAMES + 1) <= SUSPECT_BUDGET_FRAMES
+            for j in r.perturbed_reflectors
+        )
+        for r in perturbed
+    )
+    false_named = sum(
+        bool(set(r.suspect_first_frame) - set(r.perturbed_reflectors)) for r in results
+    )
 
     def boot(items, stat):
         return bootstrap_interval(items, stat, rng)
@@ -157,6 +171,10 @@ def cell_statistics(
         "median_frames_to_localised": boot(to_loc, median_of),
         "recovery_frames": boot(list(recov), median_of),
         "recovered_within_budget": wilson_interval(within, kidnapped) if kidnapped else None,
+        "suspect_named_within_budget": wilson_interval(named, len(perturbed))
+        if perturbed
+        else None,
+        "false_suspect_rate": wilson_interval(false_named, n),
     }
     return {
         "perturbation": name,
@@ -173,6 +191,8 @@ def cell_statistics(
         "recovery_frames": float(np.median(done)) if done else None,
         "recovery_frames_per_episode": list(recov),
         "recovered_within_budget": within / kidnapped if kidnapped else None,
+        "suspect_named_within_budget": named / len(perturbed) if perturbed else None,
+        "false_suspect_rate": false_named / n,
         "ci95": {k: None if v is None else [v[0], v[1]] for k, v in ci.items()},
     }
 
