@@ -27,6 +27,7 @@ from lrp_gym.errors import InputError
 if TYPE_CHECKING:  # the env stack loads only when the command runs
     from lrp_gym.config import ScenarioConfig
     from lrp_gym.experiments.episodes import EpisodeResult
+    from lrp_gym.world.world import World
 
 DEMO_ENV = "LRPRadarNav-v0"
 COLUMNS: tuple[str, ...] = ("step", "true x [m]", "true y [m]", "est x [m]", "est y [m]")
@@ -70,10 +71,24 @@ def demo(
     """
     folder = _check_options(steps, fidelity, out)
     over = overrides(scenario, sets, fidelity)
+    result, infos, world, cfg = _run(scenario, over, steps, seed)
+    summary = _summary(result, cfg, scenario)
+    if not json_out:
+        t = table(f"pure pursuit on {DEMO_ENV}, scenario {scenario}, seed {seed}", COLUMNS)
+        for row in _rows(infos):
+            t.add_row(*row)
+        console.print(t)
+        _print(summary)
+    else:
+        print_json(summary)
+    _write(folder, summary, world, quiet=json_out)
+
+
+def _run(scenario: str, over: dict, steps: int, seed: int):
+    """Drive one episode of at most ``steps`` frames: result, step infos, world and config."""
     import gymnasium as gym
 
     import lrp_gym  # noqa: F401  (registers the env ids)
-    from agents.plotting import save_trajectory
 
     env = gym.make(
         DEMO_ENV,
@@ -85,31 +100,29 @@ def demo(
     try:
         result, infos = _drive(env, seed)
         base = env.unwrapped
-        summary = _summary(result, base.cfg, scenario)
+        return result, infos, base.world, base.cfg
     finally:
         env.close()
-    if not json_out:
-        t = table(f"pure pursuit on {DEMO_ENV}, scenario {scenario}, seed {seed}", COLUMNS)
-        for row in _rows(infos):
-            t.add_row(*row)
-        console.print(t)
-        _print(summary)
-    else:
-        print_json(summary)
+
+
+def _write(folder: Path, summary: dict[str, Any], world: World, quiet: bool) -> None:
+    """trajectory.png (true and estimated tracks over the room) and summary.json."""
+    from agents.plotting import save_trajectory
+
     title = (
         f"{'reached the goal' if summary['success'] else 'did not reach the goal'} in "
         f"{summary['steps']} frames, mean error {summary['mean_loc_error_m']:.3f} m"
     )
     png = save_trajectory(
         folder / "trajectory.png",
-        base.world,
-        result.true_xy,
-        result.est_xy,
+        world,
+        summary["true_xy"],
+        summary["est_xy"],
         summary["waypoints_m"],
         title,
     )
-    wrote(png, quiet=json_out)
-    wrote(write_json(summary, folder / "summary.json"), quiet=json_out)
+    wrote(png, quiet=quiet)
+    wrote(write_json(summary, folder / "summary.json"), quiet=quiet)
 
 
 def _check_options(steps: int, fidelity: str | None, out: Path) -> Path:
