@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from lrp_gym.radar._merge import greedy_owner
-from lrp_gym.radar.channel import Paths
 from lrp_gym.radar.detections import Detections
+from lrp_gym.radar.paths import Paths
 from lrp_gym.radar.processing import window, window_dtft
 
 if TYPE_CHECKING:
