@@ -52,18 +52,7 @@ def plot_ambiguity_map(
         _draw_path(ax, np.asarray(path_xy_m, dtype=float))
     handles, labels = _area_legend(result, cmap, excluded, path_xy_m is not None)
     _draw_reflectors(ax, reflectors_m, type_index, type_names, handles, labels)
-    ax.set_xlim(-0.05 * lx, 1.05 * lx)
-    ax.set_ylim(-0.05 * ly, 1.05 * ly)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_title(
-        title
-        or f"ambiguous {100 * result.ambiguous_fraction:.1f} % "
-        f"(systematic {100 * result.systematic_fraction:.1f} %, "
-        f"random {100 * result.random_fraction:.1f} %)",
-        fontsize=10,
-    )
+    _label_axes(ax, result, lx, ly, title)
     ax.legend(
         handles,
         labels,
@@ -81,6 +70,23 @@ def plot_ambiguity_map(
         )
         bar.set_ticks([])
     return fig
+
+
+def _label_axes(ax, result: AmbiguityResult, lx: float, ly: float, title: str) -> None:
+    """Room limits with a 5 % margin, equal aspect, axis labels; the title defaults to the
+    ambiguous fractions."""
+    ax.set_xlim(-0.05 * lx, 1.05 * lx)
+    ax.set_ylim(-0.05 * ly, 1.05 * ly)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(
+        title
+        or f"ambiguous {100 * result.ambiguous_fraction:.1f} % "
+        f"(systematic {100 * result.systematic_fraction:.1f} %, "
+        f"random {100 * result.random_fraction:.1f} %)",
+        fontsize=10,
+    )
 
 
 def _draw_groups(ax, result: AmbiguityResult):
