@@ -26,9 +26,6 @@ ALLOWED: dict[str, str] = {
     "lrp_gym/localization/amcl.py": "TODO(issue 15): 402 lines; move the lost test out",
     "lrp_gym/localization/likelihood.py": "TODO(issue 15): split the map-return terms from the reflector term",
     "lrp_gym/localization/likelihood.py::FingerprintModel.log_likelihood": "hot loop over types kept in one frame for speed; TODO(issue 15) split per term",
-    "lrp_gym/radar/delivery_rate.py::lrp_detection_rate": "TODO(issue 15): split (61 lines)",
-    "lrp_gym/radar/detection_model.py::FastDetectionModel.detect": "TODO(issue 15): the model's four numbered steps, one function each",
-    "lrp_gym/tracking/synthetic.py::synthetic_stream": "TODO(issue 15): split (80 lines)",
     "lrp_gym/tracking/tracker.py::LrpTracker.update": "numpydoc of the tracker's main entry is 40 lines; the body is ~35",
 }
 
