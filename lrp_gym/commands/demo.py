@@ -89,6 +89,7 @@ def _run(scenario: str, over: dict, steps: int, seed: int):
     import gymnasium as gym
 
     import lrp_gym  # noqa: F401  (registers the env ids)
+    from lrp_gym.experiments.episodes import nav_env
 
     env = gym.make(
         DEMO_ENV,
@@ -99,7 +100,7 @@ def _run(scenario: str, over: dict, steps: int, seed: int):
     )
     try:
         result, infos = _drive(env, seed)
-        base = env.unwrapped
+        base = nav_env(env)
         return result, infos, base.world, base.cfg
     finally:
         env.close()

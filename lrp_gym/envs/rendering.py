@@ -65,8 +65,9 @@ class Renderer:
         """Waypoints as a dashed polyline and the goal as a star."""
         waypoints = path.waypoints_m
         self.ax.plot(waypoints[:, 0], waypoints[:, 1], "--", color="0.4", lw=1)
-        self.ax.scatter(*waypoints.T, s=10, color="0.4")
-        self.ax.scatter(*path.goal_m, marker="*", s=200, color="gold", edgecolor="k", zorder=6)
+        self.ax.scatter(waypoints[:, 0], waypoints[:, 1], s=10, color="0.4")
+        goal = path.goal_m
+        self.ax.scatter(goal[0], goal[1], marker="*", s=200, color="gold", edgecolor="k", zorder=6)
 
     def _draw_particles(self, particles: np.ndarray | None) -> None:
         """At most ~1500 particles (every k-th), so a 10 000-particle cloud draws quickly."""

@@ -108,8 +108,8 @@ def lrp_detection_rate(
             near.extend([False] * len(true))
             continue
         close, good, err = _match(det, true, tolerance_m, low, high)
-        near.extend(close.any(axis=1))
-        ok.extend(good.any(axis=1))
+        near.extend(np.asarray(close.any(axis=1)))
+        ok.extend(np.asarray(good.any(axis=1)))
         for m in np.flatnonzero(good.any(axis=1)):
             j = np.flatnonzero(good[m])[np.argmin(np.abs(err[m, good[m]]))]
             rcs_err.append(det.rcs_dbsm[j] - peak[m])
