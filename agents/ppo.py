@@ -51,6 +51,10 @@ RUN_OUTPUTS = ("checkpoints", "best", "final", "eval", "tb", "run_info.json", "l
 
 
 # --------------------------------------------------------------------------- envs
+#: How ``n_envs`` envs are run (``vec_env`` in the config's lrp-gym section).
+VEC_ENVS = ("batch", "subproc", "dummy")
+
+
 def gym_id(env_id: str) -> str:
     """``lrp_gym:<id>``: spawn/forkserver workers import lrp_gym and so register the id."""
     return env_id if ":" in env_id else f"lrp_gym:{env_id}"
@@ -64,16 +68,24 @@ def make_venv(
     vec_env: str = "dummy",
     monitor_dir: str | None = None,
 ) -> Any:
-    """A Monitor-wrapped vectorised env (``vec_env``: ``subproc`` or ``dummy``).
+    """A Monitor-wrapped vectorised env (``vec_env``: ``batch``, ``subproc`` or ``dummy``).
 
-    Subprocess workers ignore SIGINT/SIGTERM: the main process stops them (see
-    :func:`agents.checkpoints.close_venv`).
+    ``batch`` runs the ``n_envs`` robots in one batched env in this process
+    (:class:`lrp_gym.envs.sb3.NavBatchVecEnv`); ``subproc`` and ``dummy`` run ``n_envs`` env
+    copies in worker processes or in a loop. Subprocess workers ignore SIGINT/SIGTERM: the
+    main process stops them (see :func:`agents.checkpoints.close_venv`).
     """
     from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecMonitor
 
-    if vec_env not in ("subproc", "dummy"):
-        raise InputError(f"config: vec_env must be 'subproc' or 'dummy', got {vec_env!r}")
+    if vec_env not in VEC_ENVS:
+        raise InputError(f"config: vec_env must be one of {', '.join(VEC_ENVS)}, got {vec_env!r}")
+    if vec_env == "batch":
+        from lrp_gym.envs.sb3 import NavBatchVecEnv
+
+        batch = NavBatchVecEnv(gym_id(env_id), n_envs, env_kwargs)
+        batch.seed(seed)
+        return VecMonitor(batch, filename=None if monitor_dir is None else f"{monitor_dir}/batch")
     subproc = vec_env == "subproc" and n_envs > 1
     return make_vec_env(
         gym_id(env_id),

@@ -32,6 +32,7 @@ from lrp_gym.commands._result_formats import (
     _trust,
     _trust_argv,
     _trust_met,
+    _vec,
 )
 from lrp_gym.config import CONFIGS_DIR
 
@@ -267,6 +268,21 @@ ROWS: tuple[Row, ...] = (
             and r["variants"]["LRPRadarNavFast-v0"]["steps_per_s"] >= 3000
         ),
         typed="440 / 510-520 (missed)",
+    ),
+    Row(
+        "bench_vector",
+        "batched env (`gym.make_vec`, N = 64) against the single env, steps/s per core, "
+        "detections / signal fidelity",
+        ">= 10x / >= 4x",
+        ("bench", "-c", "vector"),
+        lambda r, _: (
+            f"{_vec(r, 'detections')} / {_vec(r, 'signal')}; peak memory "
+            f"{r['vector']['peak_rss_mb']:.0f} MB with N = 256{_bench_load(r)}"
+        ),
+        lambda r, _: (
+            r["vector"]["detections"]["N=64"]["speedup_vs_single"] >= 10
+            and r["vector"]["signal"]["N=64"]["speedup_vs_single"] >= 4
+        ),
     ),
     Row(
         "robustness_shadowing_missed",

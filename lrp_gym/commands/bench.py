@@ -29,7 +29,10 @@ COMPONENTS = {
     "tracking": ("lrp_gym.tracking.bench", "bench_tracking"),
     "amcl": ("lrp_gym.localization.bench", "bench_amcl"),
     "env": ("lrp_gym.envs.bench", "bench_envs"),
+    "vector": ("lrp_gym.envs.vector_bench", "bench_vector"),
 }
+#: ``all`` leaves out the vector bench (minutes: up to 256 robots, both fidelities).
+DEFAULT_COMPONENTS = ("radar", "tracking", "amcl", "env")
 
 
 def bench(
@@ -39,7 +42,8 @@ def bench(
         "--component",
         "-c",
         metavar="NAME",
-        help="radar, tracking, amcl, env or all.",
+        help="radar, tracking, amcl, env, vector (batched env against the single env, "
+        "N = 1, 8, 64, 256; minutes) or all (all but vector).",
     ),
     seconds: float = typer.Option(
         3.0, "--seconds", metavar="SECONDS", help="Measuring time per figure [s] (>= 0.1)."
@@ -52,7 +56,7 @@ def bench(
     """Measure speed on one core: radar frames/s, AMCL update time, env steps/s."""
     at_least(seconds, 0.1, "--seconds")
     choice(component, (*COMPONENTS, "all"), "--component")
-    names = list(COMPONENTS) if component == "all" else [component]
+    names = list(DEFAULT_COMPONENTS) if component == "all" else [component]
     out_path = check_output(out, "--out", force, (".json",))
     cfg = load_config(scenario, sets)
     _pin_to_one_core()

@@ -77,6 +77,22 @@ def episodes_option(what: str = "Number of episodes", default: int = 20) -> Any:
     )
 
 
+def num_envs_option() -> Any:
+    """``--num-envs N``: robots driven at once in one batched env (shared with robustness)."""
+    return typer.Option(
+        1,
+        "--num-envs",
+        metavar="N",
+        help="Robots driven at once in one batched env; the same episodes and numbers as "
+        "one at a time.",
+    )
+
+
+def check_num_envs(num_envs: int) -> None:
+    if num_envs < 1:
+        raise InputError(f"--num-envs: must be at least 1, got {num_envs}")
+
+
 def check_agent(agent: str, model: Path | None, task: str | None, episodes: int) -> None:
     """The checks evaluate and robustness share, before any work."""
     choice(agent, AGENT_NAMES, "--agent")
@@ -97,6 +113,7 @@ def evaluate(
     sets: list[str] = sets_option(),
     episodes: int = episodes_option(),
     seed: int = seed_option("Seed of the first episode."),
+    num_envs: int = num_envs_option(),
     out: Path = out_option("the metrics as JSON"),
     gif: Path = typer.Option(
         None, "--gif", metavar="FILE.gif", help="Write the first episode as an animated GIF."
@@ -111,6 +128,7 @@ def evaluate(
     """Evaluate an agent: success, collisions, time to goal, localisation and cross-track
     error."""
     check_agent(agent, model, task, episodes)
+    check_num_envs(num_envs)
     choice(fidelity, FIDELITIES, "--fidelity")
     out_path = check_output(out, "--out", force, (".json",))
     gif_path = check_output(gif, "--gif", force, (".gif",))
@@ -132,7 +150,7 @@ def evaluate(
     env_id = env_obj.spec.id if env_obj.spec is not None else env
     cfg = ep.nav_env(env_obj).cfg
     try:
-        with as_flags(n_episodes="--episodes"):
+        with as_flags(n_episodes="--episodes", num_envs="--num-envs"):
             summary = ep.run_episodes(
                 policy,
                 env_obj,
@@ -140,6 +158,7 @@ def evaluate(
                 seed,
                 gif_path=gif_path,
                 progress=None if json_out else _show,
+                num_envs=num_envs,
             )
     finally:
         env_obj.close()

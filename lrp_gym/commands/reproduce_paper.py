@@ -172,7 +172,11 @@ def reproduce_paper(
         rooms_over = deep_merge(parse_sets(sets, scenario), {"radar": {"noise": noise}})
         if particles is not None:
             rooms_over = deep_merge(rooms_over, _particles(particles, 200))
-        _random_rooms(random_rooms, runs, seed, rooms_over, estimator, out_path, json_out)
+        if parse_sets(sets, scenario).get("localization", {}).get("method") == "grid":
+            localizer = "grid"
+        _random_rooms(
+            random_rooms, runs, seed, rooms_over, estimator, out_path, json_out, localizer
+        )
         return
     cfg = _scenario_config(scenario, sets, fidelity, noise, particles)
     if cfg.localization.method == "grid":  # --set localization.method=grid means the same
@@ -312,22 +316,36 @@ def _particles(n: int, min_particles: int) -> dict:
 
 
 def _random_rooms(
-    n: int, runs: int, seed: int, over: dict, estimator: str, json_path, json_out: bool
+    n: int,
+    runs: int,
+    seed: int,
+    over: dict,
+    estimator: str,
+    json_path,
+    json_out: bool,
+    localizer: str = "amcl",
 ) -> None:
     """``--random-rooms``: the generated-room baseline, one line per room as it finishes
     (on stderr; with ``--json`` the summary goes to stdout as JSON instead of the table)."""
     from lrp_gym.experiments.rooms import summary, sweep
 
     def progress(r) -> None:
+        grid = "" if r.grid_radar_m is None else f", grid filter {r.grid_radar_m:.3f} m"
         err_console.print(
             f"room {r.seed}: {r.size_m[0]:.1f} x {r.size_m[1]:.1f} m, {r.obstacles} obstacles, "
             f"{r.reflectors} reflectors ({r.kinds}), {r.frames} frames: AMCL "
-            f"{r.amcl_radar_m:.3f} m (true fingerprints {r.amcl_true_m:.3f} m)",
+            f"{r.amcl_radar_m:.3f} m (true fingerprints {r.amcl_true_m:.3f} m){grid}",
             highlight=False,
         )
 
     results = sweep(
-        range(n), runs=runs, run_seed=seed, overrides=over, estimator=estimator, progress=progress
+        range(n),
+        runs=runs,
+        run_seed=seed,
+        overrides=over,
+        estimator=estimator,
+        progress=progress,
+        localizer=localizer,
     )
     data = summary(results)
     if json_path:
@@ -337,6 +355,13 @@ def _random_rooms(
         if json_path:
             wrote(json_path, quiet=True)
         return
+    _print_rooms(results, data, n, runs)
+    if json_path:
+        wrote(json_path)
+
+
+def _print_rooms(results: list, data: dict, n: int, runs: int) -> None:
+    """The ``--random-rooms`` table: one row per generated room, then the medians."""
     t = table(
         f"AMCL mean error on {n} generated rooms ({runs} runs each)",
         ("room", "size [m]", "obst.", "refl.", "kinds", "frames", "radar [m]", "true fp [m]"),
@@ -358,8 +383,6 @@ def _random_rooms(
         f"{data['median_amcl_true_m']:.3f} m with true fingerprints",
         highlight=False,
     )
-    if json_path:
-        wrote(json_path)
 
 
 def register(app: typer.Typer) -> None:

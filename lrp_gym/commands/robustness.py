@@ -32,9 +32,11 @@ from lrp_gym.commands._common import (
 from lrp_gym.commands.evaluate import (
     agent_option,
     check_agent,
+    check_num_envs,
     env_option,
     episodes_option,
     model_option,
+    num_envs_option,
     task_option,
 )
 from lrp_gym.errors import InputError
@@ -74,6 +76,7 @@ def robustness(
         help="Perturbation names, by commas (default: all).",
     ),
     seed: int = seed_option("Seed of the first episode of every cell."),
+    num_envs: int = num_envs_option(),
     out: Path = out_option("the matrix as JSON"),
     plot: Path = plot_option("heat maps (success, time localised; value and 95 % interval)"),
     force: bool = force_option(),
@@ -92,6 +95,7 @@ def robustness(
     for n in names:
         choice(n, rb.PERTURBATION_NAMES, "--perturbations")
     check_agent(agent, model, task, episodes)
+    check_num_envs(num_envs)
     with as_flags(
         perturbations="--perturbations", severities="--severities", episodes="--episodes"
     ):
@@ -116,6 +120,7 @@ def robustness(
             scenario,
             json_out,
             overrides(scenario, sets, fidelity),
+            num_envs,
         )
     if plot_path is not None:
         save_figure(rb.plot_matrix(result), plot_path)
@@ -130,7 +135,9 @@ def robustness(
             wrote(p, quiet=json_out)
 
 
-def _run(rb, agent, env, names, sev, episodes, seed, task, model, scenario, quiet, over) -> dict:
+def _run(
+    rb, agent, env, names, sev, episodes, seed, task, model, scenario, quiet, over, num_envs
+) -> dict:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
@@ -159,6 +166,7 @@ def _run(rb, agent, env, names, sev, episodes, seed, task, model, scenario, quie
             progress=lambda label: bar.update(job, description=f"{label:<26}"),
             on_episode=lambda: bar.advance(job),
             scenario=scenario,
+            num_envs=num_envs,
         )
     result["env_id"] = env or ("LRPRadarNavOracle-v0" if agent == "oracle" else "LRPRadarNav-v0")
     result["fidelity"] = (over.get("radar") or {}).get("fidelity")

@@ -7,6 +7,9 @@ id                          what differs
 ``LRPRadarNavFast-v0``      detections-level radar drawn from the channel's paths
 ``LRPRadarNavOracle-v0``    observation from the true pose (ablation)
 ==========================  =========================================================
+
+Every id also has a native vector env (``gym.make_vec(id, num_envs=N)``, the default
+vectorisation; :mod:`lrp_gym.envs.vector_env`): N robots of one scenario in one batch.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ def register_envs() -> None:
             register(
                 id=env_id,
                 entry_point="lrp_gym.envs.nav_env:LRPRadarNavEnv",
+                vector_entry_point="lrp_gym.envs.vector_env:LRPRadarNavVectorEnv",
                 kwargs=kwargs,
             )
 

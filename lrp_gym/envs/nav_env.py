@@ -16,22 +16,17 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from lrp_gym.config import ScenarioConfig, load_scenario
-from lrp_gym.envs.observations import NavSnapshot, make_observation
-from lrp_gym.envs.task import WaypointPath, sample_goal_task
+from lrp_gym.envs.nav_batch import REWARD_TERMS, NavBatch
+from lrp_gym.envs.task import WaypointPath
 from lrp_gym.localization.factory import Localizer
 from lrp_gym.localization.lut import LookupTable
 from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.localization.stack import FrameResult, LocalizationStack
-from lrp_gym.perturbations import FrameContext, PerturbationSet
+from lrp_gym.perturbations import PerturbationSet
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.tracking.tracker import LrpTracker
-from lrp_gym.world import World, integrate_unicycle, noisy_odometry, wrap_angle
-
-# Progress is searched for in a window around the last value so it cannot jump along the path.
-_PROGRESS_BACK_M = 1.0
-_PROGRESS_WINDOW_M = 3.0
 
 
 def build_config(
@@ -164,35 +159,24 @@ class LRPRadarNavEnv(gym.Env):
             observation=observation,
             task_mode=task_mode,
         )
-        self.world = World.from_config(self.cfg)
+        # The batched core with one robot: the vector env runs the same code for N.
+        self.core = NavBatch(self.cfg, 1)
+        self.world = self.core.world
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.cfg.task.frame_period_s)}
-        self.dt_s = self.cfg.task.frame_period_s
-        self.stack = LocalizationStack.from_config(self.world, self.cfg)
-        # None when no perturbation is on: the hot path then pays one `is None` test per hook.
-        perturbations = PerturbationSet.from_config(self.cfg.perturbations, self.world)
-        self.perturbations: PerturbationSet | None = perturbations if len(perturbations) else None
-        self._obs_type = make_observation(self.cfg.env.observation, self.world.room.size_m)
+        self.dt_s = self.core.dt_s
+        self._obs_type = self.core.obs_type
         self.observation_space = self._obs_type.space
         self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
-        self._radius_m = self.world.robot.radius_m
-        self._substep_dt = (
-            self.dt_s * np.arange(1, self.cfg.env.substeps + 1) / self.cfg.env.substeps
-        )
+        self._radius_m = self.core.radius_m
         self._renderer = None
-        # Episode state (set in reset); the localisation state lives in self.stack.
-        self.pose = np.zeros(3)
-        self.path: WaypointPath | None = None
-        self.frame: FrameResult | None = None
-        self.estimate: PoseEstimate | None = None
-        self.detections: Detections | None = None
-        self.fingerprint: Fingerprint | None = None
-        self._s_true = self._s_est = 0.0
-        self._last_action = np.zeros(2)
-        self._steps = 0
         self._done = False  # the episode has terminated; step() pays nothing until reset()
 
-    # The stack's stages, for rendering and inspection.
+    # ------------------------------------------------------------------ the robot's state
+    @property
+    def stack(self) -> LocalizationStack:
+        return self.core.stacks[0]
+
     @property
     def sensor(self) -> RadarSensor:
         return self.stack.sensor
@@ -209,34 +193,55 @@ class LRPRadarNavEnv(gym.Env):
     def lut(self) -> LookupTable | None:
         return self.stack.lut
 
+    @property
+    def perturbations(self) -> PerturbationSet | None:
+        return self.core.perturbations[0]
+
+    @property
+    def pose(self) -> np.ndarray:
+        """The true pose (x_m, y_m, theta_rad) (a copy; assign to move the robot)."""
+        return self.core.pose[0].copy()
+
+    @pose.setter
+    def pose(self, value: np.ndarray) -> None:
+        self.core.pose[0] = np.asarray(value, dtype=float)
+
+    @property
+    def path(self) -> WaypointPath | None:
+        return self.core.paths[0]
+
+    @property
+    def frame(self) -> FrameResult | None:
+        return self.core.frames[0]
+
+    @property
+    def estimate(self) -> PoseEstimate | None:
+        """The pose estimate the observation is built from."""
+        return self.core.estimates[0]
+
+    @estimate.setter
+    def estimate(self, value: PoseEstimate) -> None:
+        self.core.estimates[0] = value
+
+    @property
+    def detections(self) -> Detections | None:
+        frame = self.frame
+        return None if frame is None else frame.detections
+
+    @property
+    def fingerprint(self) -> Fingerprint | None:
+        frame = self.frame
+        return None if frame is None else frame.fingerprint
+
+    @property
+    def _steps(self) -> int:
+        return int(self.core.steps[0])
+
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
-        rng = self.np_random
-        task = self.cfg.task
-        if task.mode == "path":
-            self.pose = np.asarray(self.cfg.robot.start_pose, dtype=float)
-            path = WaypointPath.from_points(task.driven_path())
-        else:
-            self.pose, path = sample_goal_task(self.world.room, task, self._radius_m + 0.1, rng)
-        self.path = path
-        self._last_action = np.zeros(2)
-        self._steps = 0
         self._done = False
-        known = self.pose if self.cfg.localization.init == "gaussian" else None
-        self.stack.reset(rng, known)
-        # The robot starts at the path's start: the first projections search only its first
-        # metres. A global projection put a spread-out first estimate (uniform init) far along
-        # the path, the observation's waypoints then pointed near the goal and the robot cut
-        # across; a patrol also passes its start again at the end of every lap.
-        laps = task.laps if task.mode == "path" else 1
-        first_m = min(_PROGRESS_WINDOW_M, path.length_m / laps)
-        self._s_true = path.project(self.pose[:2], 0.0, first_m)
-        if self.perturbations is not None:
-            # The radar may see another layout than the surveyed one the localiser uses.
-            self.stack.set_radar_layout(self.perturbations.reset(self._frame_context(), rng))
-        self._sense(np.zeros(3), np.zeros(2))
-        self._s_est = path.project(self._estimate_now().pose[:2], 0.0, first_m)
+        self.core.reset_robot(0, self.np_random)
         return self._observe(), self._info(collided=False, reached=False, rewards=None)
 
     def step(self, action):
@@ -250,27 +255,16 @@ class LRPRadarNavEnv(gym.Env):
             )
             info = self._info(collided=False, reached=False, rewards=None)
             return self._observe(), 0.0, True, False, info
-        prev = self.pose
-        velocity_xy, collided = self._drive(action)
-        odo = noisy_odometry(self.world.odometry_noise, prev, self.pose, self.np_random)
-        self._steps += 1
-        if self.perturbations is not None:
-            odo, moved = self.perturbations.move(self._frame_context(), odo, self.np_random)
-            if moved is not None:
-                self.pose = moved
-        self._sense(odo, velocity_xy)
-        self._last_action = action.astype(float)
-        progress_m = self._update_progress()
-        reached = self._goal_reached()
-        reward, rewards = self._reward(progress_m, collided, reached)
-        terminated = self._terminated(collided, reached)
+        out = self.core.step(action[None, :], [self.np_random], _ROBOT_0)
+        terminated = bool(out.terminated[0])
         self._done = terminated
-        truncated = not terminated and self._steps >= self.cfg.task.max_episode_steps
         obs = self._observe()
-        info = self._info(collided=collided, reached=reached, rewards=rewards)
+        info = self.core.info(
+            0, collided=out.collided[0], reached=out.reached[0], reward_terms=out.reward_terms[0]
+        )
         if self.render_mode == "human":
             self.render()
-        return obs, reward, terminated, truncated, info
+        return obs, float(out.reward[0]), terminated, bool(out.truncated[0]), info
 
     def render(self):
         if self.render_mode is None:
@@ -289,139 +283,30 @@ class LRPRadarNavEnv(gym.Env):
             self._renderer.close()
             self._renderer = None
 
-    # ------------------------------------------------------------------ task
-    def _reward(
-        self, progress_m: float, collided: bool, reached: bool
-    ) -> tuple[float, dict[str, float]]:
-        """The step's reward and its terms (weights ``task.rewards``)."""
-        w = self.cfg.task.rewards
-        rewards = {
-            "progress": w.progress * progress_m,
-            "time": -w.time,
-            "collision": -w.collision if collided else 0.0,
-            "goal": w.goal if reached else 0.0,
-        }
-        return float(sum(rewards.values())), rewards
-
-    def _terminated(self, collided: bool, reached: bool) -> bool:
-        """A collision or the goal ends the episode (the step limit truncates it instead)."""
-        return collided or reached
-
-    def _goal_reached(self) -> bool:
-        """Within tolerance of the goal, having come along the path, not cut across to it."""
-        tol = self.cfg.task.goal_tolerance_m
-        path = self._episode_path()
-        return bool(
-            np.linalg.norm(self.pose[:2] - path.goal_m) <= tol
-            and self._s_true >= path.length_m - 2.0 * tol
-        )
-
-    def _update_progress(self) -> float:
-        """Project the true and estimated poses on the path; return the true progress made."""
-        s_prev = self._s_true
-        path = self._episode_path()
-        self._s_true = path.project(
-            self.pose[:2], max(s_prev - _PROGRESS_BACK_M, 0.0), _PROGRESS_WINDOW_M
-        )
-        self._s_est = path.project(
-            self._estimate_now().pose[:2],
-            max(self._s_est - _PROGRESS_BACK_M, 0.0),
-            _PROGRESS_WINDOW_M,
-        )
-        return self._s_true - s_prev
-
     # ------------------------------------------------------------------ internals
     def _check_action(self, action) -> np.ndarray:
-        a = np.asarray(action, dtype=float)
-        if a.shape != (2,):
-            raise ValueError(f"action must have shape (2,) = (speed, turn), got shape {a.shape}")
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"action must be finite, got {a.tolist()}")
-        return np.clip(a, -1.0, 1.0)
-
-    def _drive(self, action: np.ndarray) -> tuple[np.ndarray, bool]:
-        """Move the true pose for one frame; return (velocity_xy, collided)."""
-        lim = self.world.robot
-        speed = action[0] * (lim.max_speed_mps if action[0] >= 0 else lim.max_reverse_mps)
-        turn = action[1] * lim.max_turn_rate_rps
-        # Sub-steps catch collisions that a single end-of-frame check would tunnel through.
-        track = integrate_unicycle(self.pose, speed, turn, self._substep_dt)
-        free = self.world.room.free(track[:, :2], self._radius_m)
-        if free.all():
-            self.pose = track[-1]
-            return speed * np.array([np.cos(self.pose[2]), np.sin(self.pose[2])]), False
-        first_bad = int(np.argmin(free))
-        self.pose = track[first_bad - 1] if first_bad > 0 else self.pose.copy()
-        return np.zeros(2), True
-
-    def _sense(self, odometry: np.ndarray, velocity_xy: np.ndarray) -> None:
-        """One frame of the localisation stack at the true pose, with the perturbations' hooks."""
-        rng = self.np_random
-        pert = self.perturbations
-        hooks: dict[str, Any] = {}
-        if pert is not None:
-            ctx = self._frame_context()
-            hidden, extra = pert.radar_inputs(ctx, rng)
-            hooks = {"hidden": hidden, "extra_scatterers": extra}
-            hooks["filter_detections"] = lambda det: pert.filter_detections(ctx, det, rng)
-        frame = self.stack.step(self.pose, velocity_xy, odometry, rng, **hooks)
-        self.frame = frame
-        self.detections, self.fingerprint = frame.detections, frame.fingerprint
-        self.estimate = frame.estimate
-
-    def _frame_context(self) -> FrameContext:
-        sensor = self.stack.sensor
-        return FrameContext(
-            self._steps, self.pose, self.world, sensor.world.layout, self.dt_s, sensor
-        )
-
-    def _episode_path(self) -> WaypointPath:
-        if self.path is None:
-            raise ResetNeeded("call reset() first: the env has no episode yet")
-        return self.path
-
-    def _estimate_now(self) -> PoseEstimate:
-        if self.estimate is None:
-            raise ResetNeeded("call reset() first: the env has no pose estimate yet")
-        return self.estimate
-
-    def _snapshot(self) -> NavSnapshot:
-        est = self._estimate_now()
-        return NavSnapshot(
-            est_pose=est.pose,
-            est_std=est.std,
-            converged=est.converged,
-            confidence=est.confidence,
-            n_modes=est.n_modes,
-            true_pose=self.pose,
-            path=self._episode_path(),
-            s_est_m=self._s_est,
-            s_true_m=self._s_true,
-            last_action=self._last_action,
-            room_size_m=self.world.room.size_m,
-        )
+        return check_action(action)
 
     def _observe(self):
-        return self._obs_type.observe(self._snapshot())
+        if self.path is None:
+            raise ResetNeeded("call reset() first: the env has no episode yet")
+        return self.core.observe(0)
 
     def _info(self, *, collided: bool, reached: bool, rewards: dict | None) -> dict[str, Any]:
-        est = self._estimate_now()
-        err = est.pose[:2] - self.pose[:2]
-        return {
-            "true_pose": self.pose.copy(),
-            "est_pose": est.pose.copy(),
-            "position_error_m": float(np.hypot(*err)),
-            "heading_error_rad": float(np.abs(wrap_angle(est.pose[2] - self.pose[2]))),
-            "pose_std": est.std,
-            "n_particles": int(est.n_particles),
-            "ess": float(est.ess),
-            "n_detections": 0 if self.detections is None else len(self.detections),
-            "converged": bool(est.converged),
-            "localization_confidence": float(est.confidence),
-            "n_modes": int(est.n_modes),
-            "progress_m": self._s_true,
-            "path_length_m": self._episode_path().length_m,
-            "collision": collided,
-            "is_success": reached,
-            "rewards": rewards or {"progress": 0.0, "time": 0.0, "collision": 0.0, "goal": 0.0},
-        }
+        if self.estimate is None:
+            raise ResetNeeded("call reset() first: the env has no pose estimate yet")
+        terms = None if rewards is None else np.array([rewards[k] for k in REWARD_TERMS])
+        return self.core.info(0, collided=collided, reached=reached, reward_terms=terms)
+
+
+_ROBOT_0 = np.zeros(1, dtype=np.intp)
+
+
+def check_action(action) -> np.ndarray:
+    """One robot's action as float (2,) clipped to [-1, 1] (ValueError naming ``action``)."""
+    a = np.asarray(action, dtype=float)
+    if a.shape != (2,):
+        raise ValueError(f"action must have shape (2,) = (speed, turn), got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"action must be finite, got {a.tolist()}")
+    return np.clip(a, -1.0, 1.0)

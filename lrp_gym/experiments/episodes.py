@@ -21,6 +21,8 @@ import numpy as np
 import lrp_gym.envs  # noqa: F401  (registers the env ids)
 from lrp_gym.envs.nav_env import LRPRadarNavEnv
 from lrp_gym.localization.metrics import trust_metrics
+from lrp_gym.perturbations import PerturbationSet
+from lrp_gym.perturbations.robot_motion import Kidnapping
 
 DEFAULT_ENV = "LRPRadarNav-v0"
 ORACLE_ENV = "LRPRadarNavOracle-v0"
@@ -99,6 +101,7 @@ class EpisodeResult:
     est_xy: np.ndarray = field(repr=False)
     waypoints_m: np.ndarray = field(repr=False)
     confidence: np.ndarray | None = field(default=None, repr=False)
+    kidnap_frame: int | None = None  # the frame a kidnapping perturbation moved the robot
 
     def row(self) -> dict[str, Any]:
         """Scalar summary of the episode (JSON-friendly)."""
@@ -116,58 +119,84 @@ class EpisodeResult:
         }
 
 
+class EpisodeRecorder:
+    """Collects one episode's per-step infos into an :class:`EpisodeResult`.
+
+    Parameters
+    ----------
+    seed : int
+        The episode's seed.
+    info : dict
+        The info of ``reset`` (the start pose).
+    waypoints_m : ndarray (K, 2)
+        The episode's path.
+    dt_s : float
+        Frame period (time to goal).
+    """
+
+    def __init__(self, seed: int, info: dict[str, Any], waypoints_m: np.ndarray, dt_s: float):
+        self.seed, self.waypoints_m, self.dt_s = seed, np.asarray(waypoints_m, float), dt_s
+        self.true_xy = [np.asarray(info["true_pose"][:2], dtype=float)]
+        self.est_xy = [np.asarray(info["est_pose"][:2], dtype=float)]
+        self.errors: list[float] = []
+        self.converged: list[bool] = []
+        self.confidence: list[float] = []
+        self.episode_return, self.collision, self.success, self.steps = 0.0, False, False, 0
+
+    def add(self, reward: float, info: dict[str, Any]) -> None:
+        """One step's reward and info."""
+        self.steps += 1
+        self.episode_return += float(reward)
+        self.true_xy.append(np.asarray(info["true_pose"][:2], dtype=float))
+        self.est_xy.append(np.asarray(info["est_pose"][:2], dtype=float))
+        self.errors.append(info["position_error_m"])
+        self.converged.append(info["converged"])
+        self.confidence.append(info.get("localization_confidence", float(info["converged"])))
+        self.collision |= bool(info["collision"])
+        self.success |= bool(info["is_success"])
+
+    def result(self, kidnap: int | None = None) -> EpisodeResult:
+        """The episode's result (``kidnap``: the frame of a kidnapping, if one happened)."""
+        txy = np.asarray(self.true_xy)
+        return EpisodeResult(
+            seed=self.seed,
+            success=self.success,
+            collision=self.collision,
+            steps=self.steps,
+            episode_return=self.episode_return,
+            path_length_m=float(np.sum(np.linalg.norm(np.diff(txy, axis=0), axis=1))),
+            time_to_goal_s=self.steps * self.dt_s if self.success else None,
+            loc_error_m=np.asarray(self.errors, dtype=float),
+            converged=np.asarray(self.converged, dtype=bool),
+            confidence=np.asarray(self.confidence, dtype=float),
+            cross_track_m=cross_track_m(txy[1:], self.waypoints_m),
+            true_xy=txy,
+            est_xy=np.asarray(self.est_xy),
+            waypoints_m=self.waypoints_m,
+            kidnap_frame=kidnap,
+        )
+
+
 def run_episode(
     env: gym.Env, policy: Policy, seed: int, frames: list[np.ndarray] | None = None
 ) -> EpisodeResult:
     """Run one episode from ``env.reset(seed=seed)``; append rendered frames to ``frames``."""
     obs, info = env.reset(seed=seed)
     base = nav_env(env)
-    dt = float(base.cfg.task.frame_period_s)
     if base.path is None:  # reset() always sets the path
         raise RuntimeError("the env has no path after reset")
-    waypoints = np.asarray(base.path.waypoints_m, dtype=float)
-    true_xy = [np.asarray(info["true_pose"][:2], dtype=float)]
-    est_xy = [np.asarray(info["est_pose"][:2], dtype=float)]
-    errors: list[float] = []
-    conv: list[bool] = []
-    confidence: list[float] = []
-    ret, collision, success, steps = 0.0, False, False, 0
+    record = EpisodeRecorder(seed, info, base.path.waypoints_m, float(base.cfg.task.frame_period_s))
     if frames is not None:
         frames.append(_frame(env))
     policy.reset()
     done = False
     while not done:
-        action = policy.act(obs)
-        obs, reward, terminated, truncated, info = env.step(action)
+        obs, reward, terminated, truncated, info = env.step(policy.act(obs))
         done = terminated or truncated
-        steps += 1
-        ret += float(reward)
-        true_xy.append(np.asarray(info["true_pose"][:2], dtype=float))
-        est_xy.append(np.asarray(info["est_pose"][:2], dtype=float))
-        errors.append(info["position_error_m"])
-        conv.append(info["converged"])
-        confidence.append(info.get("localization_confidence", float(info["converged"])))
-        collision |= bool(info["collision"])
-        success |= bool(info["is_success"])
+        record.add(float(reward), info)
         if frames is not None:
             frames.append(_frame(env))
-    txy = np.asarray(true_xy)
-    return EpisodeResult(
-        seed=seed,
-        success=success,
-        collision=collision,
-        steps=steps,
-        episode_return=ret,
-        path_length_m=float(np.sum(np.linalg.norm(np.diff(txy, axis=0), axis=1))),
-        time_to_goal_s=steps * dt if success else None,
-        loc_error_m=np.asarray(errors, dtype=float),
-        converged=np.asarray(conv, dtype=bool),
-        confidence=np.asarray(confidence, dtype=float),
-        cross_track_m=cross_track_m(txy[1:], waypoints),
-        true_xy=txy,
-        est_xy=np.asarray(est_xy),
-        waypoints_m=waypoints,
-    )
+    return record.result(kidnap_frame(base.perturbations))
 
 
 def summarize(results: list[EpisodeResult]) -> dict[str, Any]:
@@ -209,6 +238,7 @@ def run_episodes(
     seed: int = 0,
     gif_path: str | Path | None = None,
     progress: Callable[[EpisodeResult], None] | None = None,
+    num_envs: int = 1,
 ) -> dict[str, Any]:
     """Run ``n_episodes`` on seeds ``seed, seed + 1, ...`` and summarise them.
 
@@ -226,6 +256,10 @@ def run_episodes(
         Write the first episode as an animated GIF.
     progress : callable, optional
         Called with each :class:`EpisodeResult` as it finishes.
+    num_envs : int
+        Robots driven at once in one batch (:mod:`lrp_gym.experiments.batched_episodes`,
+        ``env``'s scenario); the results are those of the sequential run, seed by seed. The
+        GIF episode runs alone first.
 
     Returns
     -------
@@ -235,19 +269,48 @@ def run_episodes(
     if n_episodes < 1:
         raise ValueError(f"n_episodes: must be at least 1, got {n_episodes}")
     results = []
-    for i in range(n_episodes):
-        frames: list[np.ndarray] | None = [] if (gif_path is not None and i == 0) else None
-        res = run_episode(env, policy, seed + i, frames)
-        if frames and gif_path is not None:
-            write_gif(frames, gif_path, fps=env.metadata.get("render_fps", 4))
-        results.append(res)
+    seeds = list(range(seed, seed + n_episodes))
+    if gif_path is not None:
+        frames: list[np.ndarray] = []
+        results.append(run_episode(env, policy, seeds.pop(0), frames))
+        write_gif(frames, gif_path, fps=env.metadata.get("render_fps", 4))
         if progress is not None:
-            progress(res)
+            progress(results[-1])
+    results += episode_results(env, policy, seeds, num_envs, progress)
     summary = summarize(results)
     summary["seed"] = seed
     summary["per_episode"] = [r.row() for r in results]
     summary["_results"] = results  # for plotting; dropped before JSON output
     return summary
+
+
+def episode_results(
+    env: gym.Env,
+    policy: Policy,
+    seeds: list[int],
+    num_envs: int = 1,
+    progress: Callable[[EpisodeResult], None] | None = None,
+) -> list[EpisodeResult]:
+    """One episode per seed, in ``env`` or, with ``num_envs`` > 1, in a batch of robots with
+    ``env``'s scenario (the same results); in seed order."""
+    if num_envs < 1:
+        raise ValueError(f"num_envs: must be at least 1, got {num_envs}")
+    if num_envs > 1 and len(seeds) > 1:
+        from lrp_gym.experiments.batched_episodes import run_batched
+
+        return run_batched(policy, nav_env(env).cfg, seeds, num_envs, progress)
+    results = []
+    for s in seeds:
+        results.append(run_episode(env, policy, s))
+        if progress is not None:
+            progress(results[-1])
+    return results
+
+
+def kidnap_frame(perturbations: PerturbationSet | None) -> int | None:
+    """The frame of this episode's kidnapping, if one happened."""
+    kid = perturbations.get("kidnapping") if perturbations is not None else None
+    return kid.kidnap_frame if isinstance(kid, Kidnapping) else None
 
 
 def write_gif(frames: list[np.ndarray], path: str | Path, fps: float = 4.0) -> Path:

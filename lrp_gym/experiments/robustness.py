@@ -29,9 +29,8 @@ from lrp_gym.config import PerturbationsConfig, deep_merge
 from lrp_gym.experiments.episodes import (
     EpisodeResult,
     Policy,
+    episode_results,
     make_eval_env,
-    nav_env,
-    run_episode,
     summarize,
 )
 from lrp_gym.experiments.intervals import (
@@ -43,7 +42,6 @@ from lrp_gym.experiments.intervals import (
 )
 from lrp_gym.localization import metrics
 from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M, frames_to_localised
-from lrp_gym.perturbations.robot_motion import Kidnapping
 
 LOCALISED_M = metrics.LOCALISED_M
 RECOVERY_BUDGET_FRAMES = 15
@@ -97,22 +95,22 @@ def run_cell(
     seed: int,
     on_episode: Callable[[], None] | None = None,
     rng: np.random.Generator | None = None,
+    num_envs: int = 1,
 ) -> dict[str, Any]:
     """Run one cell's episodes in ``env`` (already built with the cell's overrides).
 
-    ``rng`` draws the bootstrap resamples of the intervals (default: seeded with ``seed``).
+    ``rng`` draws the bootstrap resamples of the intervals (default: seeded with ``seed``);
+    ``num_envs`` > 1 drives that many robots at once (the same episodes).
     """
-    results: list[EpisodeResult] = []
-    recov: list[int | None] = []
-    for i in range(episodes):
-        res = run_episode(env, policy, seed + i)
-        results.append(res)
-        pert = nav_env(env).perturbations
-        kid = pert.get("kidnapping") if pert is not None else None
-        if isinstance(kid, Kidnapping) and kid.kidnap_frame is not None:
-            recov.append(recovery_frames(res.loc_error_m, kid.kidnap_frame))
-        if on_episode is not None:
-            on_episode()
+    seeds = list(range(seed, seed + episodes))
+    results = episode_results(
+        env, policy, seeds, num_envs, None if on_episode is None else lambda _: on_episode()
+    )
+    recov: list[int | None] = [
+        recovery_frames(r.loc_error_m, r.kidnap_frame)
+        for r in results
+        if r.kidnap_frame is not None
+    ]
     rng = np.random.default_rng(seed) if rng is None else rng
     return cell_statistics(name, severity, results, recov, rng)
 
@@ -192,6 +190,7 @@ def run_matrix(
     progress: Callable[[str], None] | None = None,
     on_episode: Callable[[], None] | None = None,
     scenario: str | None = None,
+    num_envs: int = 1,
 ) -> dict[str, Any]:
     """The whole matrix (baseline row first).
 
@@ -215,6 +214,8 @@ def run_matrix(
         Called after every episode.
     scenario : str, optional
         Scenario name or file; ``task`` then sets its ``task.mode`` (None: keep it).
+    num_envs : int
+        Robots driven at once per cell (the same episodes as one at a time).
 
     Returns
     -------
@@ -239,7 +240,9 @@ def run_matrix(
         try:
             if policy is None:
                 policy = make_policy(env)
-            cells.append(run_cell(env, policy, name, sev, episodes, seed, on_episode))
+            cells.append(
+                run_cell(env, policy, name, sev, episodes, seed, on_episode, num_envs=num_envs)
+            )
         finally:
             env.close()
     return {

@@ -26,6 +26,7 @@ relocalisation rather than a crash.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import replace
 
 import numpy as np
@@ -108,6 +109,15 @@ class Amcl:
         self._n_fits = 0
         self._predicted: tuple[np.ndarray, np.ndarray] | None = None
         self.last_k_bins = 0
+
+    def spawn(self) -> Amcl:
+        """Another robot's filter: the model, grids and binner shared, its own particles,
+        weights and lost test (call :meth:`reset` before use)."""
+        new = copy.copy(self)
+        new.lost = LostTest(self.cfg.lost_drift_nats, self.cfg.lost_threshold_nats)
+        new.particles, new.weights = np.zeros((0, 3)), np.zeros(0)
+        new._predicted = new._grid_loglik = None
+        return new
 
     # ------------------------------------------------------------------ sampling
     def _free(self, xy: np.ndarray) -> np.ndarray:

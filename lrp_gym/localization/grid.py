@@ -120,6 +120,10 @@ class GridFilter:
         """Posterior probability of each xy cell (nx, ny), summed over headings."""
         return self._density.sum(axis=0)
 
+    def spawn(self) -> GridFilter:
+        """Another robot's filter (the grid filter is offline: a fresh one, nothing shared)."""
+        return GridFilter(self.world, self.cfg)
+
     # ------------------------------------------------------------------ prior
     def reset(self, rng: np.random.Generator | None = None, pose: np.ndarray | None = None) -> None:
         """Start from the uniform prior, or from a Gaussian around ``pose``.

@@ -20,6 +20,7 @@ heading, so the stack's pose estimate is then the table's position with the loca
 
 from __future__ import annotations
 
+import copy
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -178,6 +179,22 @@ class LocalizationStack:
             map_aided=map_aided,
             use_ego=use_ego,
         )
+
+    def spawn(self) -> LocalizationStack:
+        """Another robot's stack on the same map (a batch of robots has one each).
+
+        The read-only parts are shared: world, radar model (channel, processor, CFAR), the
+        localiser's measurement model and likelihood grids, the look-up table. The per-robot
+        state listed in the class notes is the new stack's own; :meth:`reset` it before use.
+        """
+        new = copy.copy(self)
+        # A shallow copy: the radar's per-frame attributes (last paths) are then its own.
+        new.surveyed_sensor = new.sensor = copy.copy(self.surveyed_sensor)
+        new.tracker = copy.copy(self.tracker)
+        new.tracker.reset()
+        new.localizer = self.localizer.spawn()
+        new.converged = False
+        return new
 
     # ------------------------------------------------------------------ per-robot state
     def reset(self, rng: np.random.Generator, known_pose: np.ndarray | None = None) -> None:

@@ -76,7 +76,7 @@ def test_progress_starts_at_the_start_of_the_path(name):
         env.reset(seed=1)
         base = nav_env(env)
         assert base.cfg.localization.init == "uniform"
-        assert base._s_true == pytest.approx(0.0)
-        assert base._s_est <= 3.0 < base.path.length_m / base.cfg.task.laps
+        assert base.core.s_true_m[0] == pytest.approx(0.0)
+        assert base.core.s_est_m[0] <= 3.0 < base.path.length_m / base.cfg.task.laps
     finally:
         env.close()

@@ -97,6 +97,18 @@ def test_room_sweep_records_both_fingerprint_kinds():
     assert summary(results)["median_amcl_true_m"] == r.amcl_true_m
 
 
+def test_room_sweep_runs_the_grid_filter_when_asked():
+    from lrp_gym.experiments.rooms import summary, sweep
+
+    (r,) = sweep([4], small=True, localizer="grid")
+    assert r.grid_radar_m is not None and np.isfinite(r.grid_radar_m)
+    s = summary([r])
+    assert s["share_grid_radar_within_0_15_m"] == float(r.grid_radar_m <= 0.15)
+    lost = r.grid_radar_m <= 0.15 and not r.amcl_radar_m <= 0.15
+    assert s["rooms_grid_localises_amcl_does_not"] == ([4] if lost else [])
+    assert "share_grid_radar_within_0_15_m" not in summary(sweep([4], small=True))
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
