@@ -86,6 +86,13 @@ def learning_curve_figure(
     return fig
 
 
+#: the shipped model's JSON field -> the run_info.json field it copies, in this order
+RUN_INFO_FIELDS = {
+    "train_command": "command",
+    **{key: key for key in ("config", "env_id", "seed", "timesteps", "wall_time_s", "hyperparams")},
+}
+
+
 def export_model(
     run_dir: str | Path,
     dest_dir: str | Path,
@@ -105,9 +112,35 @@ def export_model(
     which : {"best", "final"}
         EvalCallback's best model or the model at the end of training.
     """
+    run_dir, dest = Path(run_dir), Path(dest_dir)
+    src = _copy_model(run_dir, which, dest, name)
+    summary, eval_s = _evaluate_model(dest / f"{name}.zip", eval_env_id, episodes, seed)
+    info_path = run_dir / "run_info.json"
+    run_info = json.loads(info_path.read_text()) if info_path.is_file() else {}
+    doc = {
+        "model": f"{name}.zip",
+        "statistics": "vecnormalize.json",
+        "source": str(src),
+        **{key: run_info.get(field) for key, field in RUN_INFO_FIELDS.items()},
+        "final_eval": {
+            "env_id": eval_env_id,
+            "episodes": episodes,
+            "seed": seed,
+            "eval_wall_time_s": round(eval_s, 1),
+            **summary,
+        },
+    }
+    write_json(dest / f"{name}.json", doc)
+    return doc
+
+
+def _copy_model(run_dir: Path, which: str, dest: Path, name: str) -> Path:
+    """Copy the run's model and its normalisation statistics into ``dest``; return the source zip.
+
+    Each file is written beside its target and renamed, so a reader never sees half a model.
+    """
     from agents.model_io import find_stats
 
-    run_dir, dest = Path(run_dir), Path(dest_dir)
     src = run_dir / ("best/best_model.zip" if which == "best" else "final/model.zip")
     if not src.is_file():
         raise InputError(f"run_dir: {src} does not exist (has the run finished?)")
@@ -119,32 +152,18 @@ def export_model(
         tmp = target.with_name(target.name + ".tmp")
         shutil.copyfile(source, tmp)
         tmp.replace(target)
-    env = make_eval_env("ppo", eval_env_id)
+    return src
+
+
+def _evaluate_model(
+    model: Path, env_id: str, episodes: int, seed: int
+) -> tuple[dict[str, Any], float]:
+    """Public episode metrics of ``model`` on ``env_id`` (no per-episode rows) and the seconds
+    from loading the model to the end of the episodes (the env's creation not counted)."""
+    env = make_eval_env("ppo", env_id)
     t0 = time.perf_counter()
-    policy = load_ppo(dest / f"{name}.zip", (env.observation_space, env.action_space))
+    policy = load_ppo(model, (env.observation_space, env.action_space))
     summary = public(run_episodes(policy, env, episodes, seed))
     env.close()
     summary.pop("per_episode", None)
-    info_path = run_dir / "run_info.json"
-    run_info = json.loads(info_path.read_text()) if info_path.is_file() else {}
-    doc = {
-        "model": f"{name}.zip",
-        "statistics": "vecnormalize.json",
-        "source": str(src),
-        "train_command": run_info.get("command"),
-        "config": run_info.get("config"),
-        "env_id": run_info.get("env_id"),
-        "seed": run_info.get("seed"),
-        "timesteps": run_info.get("timesteps"),
-        "wall_time_s": run_info.get("wall_time_s"),
-        "hyperparams": run_info.get("hyperparams"),
-        "final_eval": {
-            "env_id": eval_env_id,
-            "episodes": episodes,
-            "seed": seed,
-            "eval_wall_time_s": round(time.perf_counter() - t0, 1),
-            **summary,
-        },
-    }
-    write_json(dest / f"{name}.json", doc)
-    return doc
+    return summary, time.perf_counter() - t0

@@ -21,7 +21,7 @@ import numpy as np
 
 import lrp_gym  # noqa: F401  (registers the envs)
 from agents.pure_pursuit import PurePursuitPolicy
-from lrp_gym.radar.channel import KIND_NAMES
+from lrp_gym.radar.paths import KIND_NAMES
 from lrp_gym.tracking.fingerprint import Fingerprint
 
 

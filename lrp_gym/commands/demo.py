@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import typer
 
@@ -23,9 +24,22 @@ from lrp_gym.commands._common import (
 )
 from lrp_gym.errors import InputError
 
+if TYPE_CHECKING:  # the env stack loads only when the command runs
+    from lrp_gym.config import ScenarioConfig
+    from lrp_gym.experiments.episodes import EpisodeResult
+    from lrp_gym.world.world import World
+
 DEMO_ENV = "LRPRadarNav-v0"
 COLUMNS: tuple[str, ...] = ("step", "true x [m]", "true y [m]", "est x [m]", "est y [m]")
 COLUMNS += ("error [m]", "std [m]", "dets", "conv")
+#: metrics of :func:`~lrp_gym.experiments.episodes.summarize` the summary reports, in this order
+SUMMARY_METRICS = (
+    "mean_loc_error_m",
+    "p95_loc_error_m",
+    "max_loc_error_m",
+    "time_localised",
+    "mean_cross_track_m",
+)
 
 
 def demo(
@@ -55,20 +69,26 @@ def demo(
     every frame, prints true vs estimated position per step, and writes trajectory.png and
     summary.json into the --out folder.
     """
-    if steps < 1:
-        raise InputError(f"--steps: must be at least 1, got {steps}")
-    choice(fidelity, FIDELITIES, "--fidelity")
-    folder = check_output(out, "--out", directory=True)
-    if folder is None:
-        raise InputError("--out: give a folder")
-    for name in ("trajectory.png", "summary.json"):
-        if (folder / name).is_dir():
-            raise InputError(f"--out: {folder / name} is a folder, expected a file name")
+    folder = _check_options(steps, fidelity, out)
     over = overrides(scenario, sets, fidelity)
+    result, infos, world, cfg = _run(scenario, over, steps, seed)
+    summary = _summary(result, cfg, scenario)
+    if not json_out:
+        t = table(f"pure pursuit on {DEMO_ENV}, scenario {scenario}, seed {seed}", COLUMNS)
+        for row in _rows(infos):
+            t.add_row(*row)
+        console.print(t)
+        _print(summary)
+    else:
+        print_json(summary)
+    _write(folder, summary, world, quiet=json_out)
+
+
+def _run(scenario: str, over: dict, steps: int, seed: int):
+    """Drive one episode of at most ``steps`` frames: result, step infos, world and config."""
     import gymnasium as gym
 
     import lrp_gym  # noqa: F401  (registers the env ids)
-    from agents.plotting import save_trajectory
     from lrp_gym.experiments.episodes import nav_env
 
     env = gym.make(
@@ -79,57 +99,77 @@ def demo(
         max_episode_steps=steps,
     )
     try:
-        rows, tracks, info = _drive(env, seed)
+        result, infos = _drive(env, seed)
         base = nav_env(env)
-        summary = _summary(base, scenario, seed, tracks, info)
+        return result, infos, base.world, base.cfg
     finally:
         env.close()
-    if not json_out:
-        t = table(f"pure pursuit on {DEMO_ENV}, scenario {scenario}, seed {seed}", COLUMNS)
-        for row in rows:
-            t.add_row(*row)
-        console.print(t)
-        _print(summary)
-    else:
-        print_json(summary)
-    n = summary["steps"]
+
+
+def _write(folder: Path, summary: dict[str, Any], world: World, quiet: bool) -> None:
+    """trajectory.png (true and estimated tracks over the room) and summary.json."""
+    from agents.plotting import save_trajectory
+
     title = (
         f"{'reached the goal' if summary['success'] else 'did not reach the goal'} in "
-        f"{n} frames, mean error {summary['mean_loc_error_m']:.3f} m"
+        f"{summary['steps']} frames, mean error {summary['mean_loc_error_m']:.3f} m"
     )
-    waypoints_m = summary["waypoints_m"]
     png = save_trajectory(
-        folder / "trajectory.png", base.world, tracks[0], tracks[1], waypoints_m, title
+        folder / "trajectory.png",
+        world,
+        summary["true_xy"],
+        summary["est_xy"],
+        summary["waypoints_m"],
+        title,
     )
-    wrote(png, quiet=json_out)
-    wrote(write_json(summary, folder / "summary.json"), quiet=json_out)
+    wrote(png, quiet=quiet)
+    wrote(write_json(summary, folder / "summary.json"), quiet=quiet)
 
 
-def _drive(env, seed: int):
-    """Run one episode; per-step table rows, (true, estimated) xy arrays and the last info."""
-    import numpy as np
+def _check_options(steps: int, fidelity: str | None, out: Path) -> Path:
+    """The run folder, after checking --steps, --fidelity and --out (InputError naming them)."""
+    if steps < 1:
+        raise InputError(f"--steps: must be at least 1, got {steps}")
+    choice(fidelity, FIDELITIES, "--fidelity")
+    folder = check_output(out, "--out", directory=True)
+    if folder is None:
+        raise InputError("--out: give a folder")
+    for name in ("trajectory.png", "summary.json"):
+        if (folder / name).is_dir():
+            raise InputError(f"--out: {folder / name} is a folder, expected a file name")
+    return folder
+
+
+def _drive(env, seed: int) -> tuple[EpisodeResult, list[dict[str, Any]]]:
+    """Run one pure-pursuit episode; its :class:`EpisodeResult` and the info of every step."""
+    import gymnasium as gym
 
     from agents.pure_pursuit import PurePursuitPolicy
+    from lrp_gym.experiments.episodes import run_episode
+
+    class _InfoRecorder(gym.Wrapper):
+        # The episode runner keeps only the metrics; the table also wants std and detections.
+        def step(self, action):
+            out = self.env.step(action)
+            infos.append(out[-1])
+            return out
+
+    infos: list[dict[str, Any]] = []
+    policy = PurePursuitPolicy.from_env(env)
+    return run_episode(_InfoRecorder(env), policy, seed), infos
+
+
+def _rows(infos: list[dict[str, Any]]) -> list[tuple[str, ...]]:
+    """One table row per step: true and estimated position, error, spread, detections."""
     from lrp_gym.localization.metrics import LOCALISED_M
 
-    policy = PurePursuitPolicy.from_env(env)
-    obs, info = env.reset(seed=seed)
-    true_xy, est_xy = [info["true_pose"][:2]], [info["est_pose"][:2]]
-    rows: list[tuple[str, ...]] = []
-    errors: list[float] = []
-    done = False
-    while not done:
-        action, _ = policy.predict(obs)
-        obs, _, terminated, truncated, info = env.step(action)
-        done = terminated or truncated
+    rows = []
+    for k, info in enumerate(infos, start=1):
         t, e, err = info["true_pose"], info["est_pose"], info["position_error_m"]
-        true_xy.append(t[:2])
-        est_xy.append(e[:2])
-        errors.append(err)
         colour = "green" if err < LOCALISED_M else "red"
         rows.append(
             (
-                str(len(rows) + 1),
+                str(k),
                 *(f"{v:.3f}" for v in (t[0], t[1], e[0], e[1])),
                 f"[{colour}]{err:.3f}[/]",
                 f"{max(info['pose_std'][:2]):.3f}",
@@ -137,36 +177,29 @@ def _drive(env, seed: int):
                 "yes" if info["converged"] else "no",
             )
         )
-    return rows, (np.asarray(true_xy), np.asarray(est_xy), np.asarray(errors)), info
+    return rows
 
 
-def _summary(base, scenario: str, seed: int, tracks, info) -> dict:
-    import numpy as np
+def _summary(result: EpisodeResult, cfg: ScenarioConfig, scenario: str) -> dict[str, Any]:
+    """The demo's summary: the episode runner's metrics of this one episode, and its tracks."""
+    from lrp_gym.experiments.episodes import summarize
 
-    from lrp_gym.experiments.episodes import cross_track_m
-    from lrp_gym.localization.metrics import LOCALISED_M
-
-    true_xy, est_xy, err = tracks
-    n = len(err)
-    waypoints = base.path.waypoints_m
+    metrics = summarize([result])
     return {
         "env_id": DEMO_ENV,
         "scenario": scenario,
-        "fidelity": base.cfg.radar.fidelity,
-        "seed": seed,
-        "steps": n,
-        "success": bool(info["is_success"]),
-        "collision": bool(info["collision"]),
-        "time_s": n * base.cfg.task.frame_period_s,
-        "driven_length_m": float(np.sum(np.linalg.norm(np.diff(true_xy, axis=0), axis=1))),
-        "mean_loc_error_m": float(err.mean()),
-        "p95_loc_error_m": float(np.percentile(err, 95)),
-        "max_loc_error_m": float(err.max()),
-        "time_localised": float(np.mean(err < LOCALISED_M)),
-        "mean_cross_track_m": float(cross_track_m(true_xy[1:], waypoints).mean()),
-        "true_xy": true_xy,
-        "est_xy": est_xy,
-        "waypoints_m": waypoints,
+        "fidelity": cfg.radar.fidelity,
+        "seed": result.seed,
+        "steps": result.steps,
+        "success": result.success,
+        "collision": result.collision,
+        # Frames driven, not time to goal: the demo also reports a run that misses the goal.
+        "time_s": result.steps * cfg.task.frame_period_s,
+        "driven_length_m": result.path_length_m,
+        **{key: metrics[key] for key in SUMMARY_METRICS},
+        "true_xy": result.true_xy,
+        "est_xy": result.est_xy,
+        "waypoints_m": result.waypoints_m,
     }
 
 

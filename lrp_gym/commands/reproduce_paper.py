@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from pathlib import Path
 from typing import cast
 
 import numpy as np
@@ -30,7 +32,7 @@ from lrp_gym.commands._common import (
     write_json,
     wrote,
 )
-from lrp_gym.config import deep_merge
+from lrp_gym.config import ScenarioConfig, deep_merge
 from lrp_gym.errors import InputError
 from lrp_gym.experiments.reproduce import PAPER, Reproduction, reproduce
 
@@ -45,6 +47,14 @@ def plot_errors(result: Reproduction, title: str = ""):
 
     pos = np.arange(1, result.lut_errors_m.shape[1] + 1)
     fig, ax = plt.subplots(figsize=(7.5, 4))
+    _draw_our_errors(ax, result, pos)
+    _draw_paper_values(ax)
+    _style_error_axes(ax, pos, title)
+    return fig
+
+
+def _draw_our_errors(ax, result: Reproduction, pos: np.ndarray) -> None:
+    """Each localiser's errors per position: median marker, whiskers from min to max run."""
     runs = len(result.amcl_errors_m)
     series = [
         (result.lut_errors_m, "s", "tab:orange", -0.12, "look-up table"),
@@ -65,6 +75,10 @@ def plot_errors(result: Reproduction, title: str = ""):
             ms=5,
             label=f"{label}: median, bars min–max ({runs} runs)",
         )
+
+
+def _draw_paper_values(ax) -> None:
+    """The paper's published figures: LUT failures, AMCL mean error, AMCL convergence."""
     fail = cast(dict[int, float], PAPER["lut_failures_m"])
     ax.plot(
         list(fail),
@@ -89,6 +103,10 @@ def plot_errors(result: Reproduction, title: str = ""):
         lw=1,
         label=f"paper: AMCL converged at position {PAPER['amcl_converged_after']}",
     )
+
+
+def _style_error_axes(ax, pos: np.ndarray, title: str) -> None:
+    """Log error axis from just under the 1 mm floor, one tick per position, legend outside."""
     ax.set_yscale("log")
     ax.set_ylim(FLOOR_M * 0.8, None)
     ax.set_xlabel("position on the path")
@@ -98,7 +116,6 @@ def plot_errors(result: Reproduction, title: str = ""):
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     if title:
         ax.set_title(title, fontsize=10)
-    return fig
 
 
 def reproduce_paper(
@@ -146,18 +163,9 @@ def reproduce_paper(
 ) -> None:
     """Run the full chain (radar, CFAR, tracking, look-up table, AMCL) along the scenario's
     path and compare the per-position errors with the paper's."""
-    if runs < 1:
-        raise InputError(f"--runs: must be at least 1, got {runs}")
-    choice(fidelity, FIDELITIES, "--fidelity")
-    choice(estimator, ESTIMATORS, "--estimator")
-    choice(localizer, ("amcl", "grid"), "--localizer")
-    if particles is not None and particles < 10:
-        raise InputError(f"--particles: must be at least 10, got {particles}")
-    out_path = check_output(out, "--out", force, (".json",))
-    plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
-    check_distinct(out_path, plot_path)
-    if random_rooms < 0:
-        raise InputError(f"--random-rooms: must not be negative, got {random_rooms}")
+    out_path, plot_path = _check_options(
+        runs, fidelity, estimator, localizer, particles, out, plot, force, random_rooms
+    )
     if random_rooms:
         if true_fingerprints or plot_path:
             raise InputError("--random-rooms: runs both fingerprint kinds and draws no --plot")
@@ -170,30 +178,14 @@ def reproduce_paper(
             random_rooms, runs, seed, rooms_over, estimator, out_path, json_out, localizer
         )
         return
-    cfg = load_config(scenario, sets, fidelity)
-    over: dict = {"radar": {"noise": noise}}
-    if particles is not None:
-        over.update(_particles(particles, cfg.localization.min_particles))
-    cfg = cfg.with_overrides(over)
+    cfg = _scenario_config(scenario, sets, fidelity, noise, particles)
     if cfg.localization.method == "grid":  # --set localization.method=grid means the same
         localizer = "grid"
-    if len(cfg.task.path) < 2:
-        raise InputError(f"SCENARIO: {cfg.name} has no path (task.path needs 2+ waypoints)")
-
-    def progress(run: int, info: dict) -> None:
-        grid = info.get("grid_mean_error_m")
-        err_console.print(
-            f"run {run + 1}/{runs}: LUT mean error {info['lut_mean_error_m']:.3f} m, "
-            f"AMCL mean error {info['amcl_mean_error_m']:.3f} m"
-            + (f", grid mean error {grid:.3f} m" if grid is not None else ""),
-            highlight=False,
-        )
-
     result = reproduce(
         cfg,
         runs=runs,
         seed=seed,
-        progress=progress,
+        progress=_progress_printer(runs),
         true_fingerprints=true_fingerprints,
         estimator=estimator,
         localizer=localizer,
@@ -211,6 +203,62 @@ def reproduce_paper(
     for p in (out_path, plot_path):
         if p is not None:
             wrote(p, quiet=json_out)
+
+
+def _check_options(
+    runs: int,
+    fidelity: str | None,
+    estimator: str,
+    localizer: str,
+    particles: int | None,
+    out: str | None,
+    plot: str | None,
+    force: bool,
+    random_rooms: int,
+) -> tuple[Path | None, Path | None]:
+    """The --out and --plot paths, after checking every option (InputError naming it)."""
+    if runs < 1:
+        raise InputError(f"--runs: must be at least 1, got {runs}")
+    choice(fidelity, FIDELITIES, "--fidelity")
+    choice(estimator, ESTIMATORS, "--estimator")
+    choice(localizer, ("amcl", "grid"), "--localizer")
+    if particles is not None and particles < 10:
+        raise InputError(f"--particles: must be at least 10, got {particles}")
+    out_path = check_output(out, "--out", force, (".json",))
+    plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
+    check_distinct(out_path, plot_path)
+    if random_rooms < 0:
+        raise InputError(f"--random-rooms: must not be negative, got {random_rooms}")
+    return out_path, plot_path
+
+
+def _scenario_config(
+    scenario: str, sets: list[str], fidelity: str | None, noise: bool, particles: int | None
+) -> ScenarioConfig:
+    """The scenario with --set, --fidelity, --noise and --particles applied; it needs a path."""
+    cfg = load_config(scenario, sets, fidelity)
+    over: dict = {"radar": {"noise": noise}}
+    if particles is not None:
+        over.update(_particles(particles, cfg.localization.min_particles))
+    cfg = cfg.with_overrides(over)
+    if len(cfg.task.path) < 2:
+        raise InputError(f"SCENARIO: {cfg.name} has no path (task.path needs 2+ waypoints)")
+    return cfg
+
+
+def _progress_printer(runs: int) -> Callable[[int, dict], None]:
+    """A progress callback that prints each run's mean errors to stderr as it finishes."""
+
+    def progress(run: int, info: dict) -> None:
+        grid = info.get("grid_mean_error_m")
+        err_console.print(
+            f"run {run + 1}/{runs}: LUT mean error {info['lut_mean_error_m']:.3f} m, "
+            f"AMCL mean error {info['amcl_mean_error_m']:.3f} m"
+            + (f", grid mean error {grid:.3f} m" if grid is not None else ""),
+            highlight=False,
+        )
+
+    return progress
 
 
 def _print(name: str, data: dict, noise: bool) -> None:
@@ -312,7 +360,8 @@ def _random_rooms(
         wrote(json_path)
 
 
-def _print_rooms(results, data: dict, runs: int) -> None:
+def _print_rooms(results: list, data: dict, runs: int) -> None:
+    """The ``--random-rooms`` table: one row per generated room, then the medians."""
     t = table(
         f"AMCL mean error on {len(results)} generated rooms ({runs} runs each)",
         ("room", "size [m]", "obst.", "refl.", "kinds", "frames", "radar [m]", "true fp [m]"),

@@ -43,6 +43,7 @@ class Renderer:
         self.ax = self.fig.add_axes((0.1, 0.22, 0.86, 0.72))  # room for the legend below
 
     def draw(self, env):
+        """Paint one frame of ``env``, layer by layer; the RGB array in ``rgb_array`` mode."""
         ax, world = self.ax, self.world
         lx, ly = world.room.size_m[:2]
         ax.clear()
@@ -50,55 +51,80 @@ class Renderer:
         ax.set_ylim(-0.1, ly + 0.1)
         ax.set_aspect("equal")
         draw_room(ax, world)
-        layout = world.layout
-        path = env.path.waypoints_m
-        ax.plot(path[:, 0], path[:, 1], "--", color="0.4", lw=1)
-        ax.scatter(*path.T, s=10, color="0.4")
-        ax.scatter(*env.path.goal_m, marker="*", s=200, color="gold", edgecolor="k", zorder=6)
-        particles = getattr(env.localizer, "particles", None)
-        if particles is not None and len(particles):
-            step = max(len(particles) // 1500, 1)
-            ax.scatter(
-                particles[::step, 0], particles[::step, 1], s=1, color="tab:orange", alpha=0.4
-            )
-        # Tracked distances drawn as floor-plane circles around the reflector they best fit.
-        fp = env.fingerprint
-        radar = world.radar_position(env.pose[:2])
+        self._draw_path(env.path)
+        self._draw_particles(getattr(env.localizer, "particles", None))
+        if env.fingerprint is not None:
+            self._draw_range_circles(env.fingerprint, env.pose)
+        self._draw_true_pose(env.pose)
+        if env.estimate is not None:
+            self._draw_estimate(env.estimate)
+        self._draw_labels(env)
+        return self._show()
+
+    def _draw_path(self, path) -> None:
+        """Waypoints as a dashed polyline and the goal as a star."""
+        waypoints = path.waypoints_m
+        self.ax.plot(waypoints[:, 0], waypoints[:, 1], "--", color="0.4", lw=1)
+        self.ax.scatter(waypoints[:, 0], waypoints[:, 1], s=10, color="0.4")
+        goal = path.goal_m
+        self.ax.scatter(goal[0], goal[1], marker="*", s=200, color="gold", edgecolor="k", zorder=6)
+
+    def _draw_particles(self, particles: np.ndarray | None) -> None:
+        """At most ~1500 particles (every k-th), so a 10 000-particle cloud draws quickly."""
+        if particles is None or not len(particles):
+            return
+        step = max(len(particles) // 1500, 1)
+        self.ax.scatter(
+            particles[::step, 0], particles[::step, 1], s=1, color="tab:orange", alpha=0.4
+        )
+
+    def _draw_range_circles(self, fingerprint, pose: np.ndarray) -> None:
+        """Tracked distances as floor-plane circles around the reflector they best fit."""
+        world, layout = self.world, self.world.layout
+        radar = world.radar_position(pose[:2])
         dz2 = (layout.positions_m[:, 2] - world.mount_height_m) ** 2
-        if fp is not None:
-            for t, dists in enumerate(fp.distances_m):
-                idx = np.flatnonzero(layout.type_index == t)
-                true_d = layout.distances_m(radar)[idx]
-                for d in dists:
-                    j = idx[np.argmin(np.abs(true_d - d))]
-                    r = np.sqrt(max(d**2 - dz2[j], 0.0))
-                    circ = np.linspace(0, 2 * np.pi, 90)
-                    ax.plot(
-                        layout.positions_m[j, 0] + r * np.cos(circ),
-                        layout.positions_m[j, 1] + r * np.sin(circ),
-                        color=TYPE_COLOURS[t % len(TYPE_COLOURS)],
-                        lw=0.6,
-                        alpha=0.5,
-                    )
-        x, y, th = env.pose
-        ax.add_patch(plt_circle((x, y), world.robot.radius_m, "tab:green"))
-        ax.arrow(
+        for t, dists in enumerate(fingerprint.distances_m):
+            idx = np.flatnonzero(layout.type_index == t)
+            true_d = layout.distances_m(radar)[idx]
+            for d in dists:
+                j = idx[np.argmin(np.abs(true_d - d))]
+                # The slant distance projected onto the floor plane of the radar.
+                r = np.sqrt(max(d**2 - dz2[j], 0.0))
+                circ = np.linspace(0, 2 * np.pi, 90)
+                self.ax.plot(
+                    layout.positions_m[j, 0] + r * np.cos(circ),
+                    layout.positions_m[j, 1] + r * np.sin(circ),
+                    color=TYPE_COLOURS[t % len(TYPE_COLOURS)],
+                    lw=0.6,
+                    alpha=0.5,
+                )
+
+    def _draw_true_pose(self, pose: np.ndarray) -> None:
+        """The robot's outline and heading arrow at its true pose."""
+        x, y, th = pose
+        self.ax.add_patch(plt_circle((x, y), self.world.robot.radius_m, "tab:green"))
+        self.ax.arrow(
             x, y, 0.35 * np.cos(th), 0.35 * np.sin(th), width=0.02, color="tab:green", zorder=7
         )
-        est = env.estimate
-        if est is not None:
-            ex, ey, eth = est.pose
-            ell = covariance_ellipse(est.covariance[:2, :2]) + est.pose[:2]
-            ax.plot(ell[:, 0], ell[:, 1], color="tab:purple", lw=1.5)
-            ax.arrow(
-                ex,
-                ey,
-                0.3 * np.cos(eth),
-                0.3 * np.sin(eth),
-                width=0.015,
-                color="tab:purple",
-                zorder=8,
-            )
+
+    def _draw_estimate(self, est) -> None:
+        """The estimated pose's 2-sigma position ellipse and heading arrow."""
+        ex, ey, eth = est.pose
+        ell = covariance_ellipse(est.covariance[:2, :2]) + est.pose[:2]
+        self.ax.plot(ell[:, 0], ell[:, 1], color="tab:purple", lw=1.5)
+        self.ax.arrow(
+            ex,
+            ey,
+            0.3 * np.cos(eth),
+            0.3 * np.sin(eth),
+            width=0.015,
+            color="tab:purple",
+            zorder=8,
+        )
+
+    def _draw_labels(self, env) -> None:
+        """Title (step, position error, detections), axis labels and the legend below."""
+        ax, est = self.ax, env.estimate
         err = float(np.hypot(*(est.pose[:2] - env.pose[:2]))) if est is not None else float("nan")
         ax.set_title(
             f"step {env._steps}  error {err:.3f} m  dets {len(env.detections)}", fontsize=9
@@ -115,6 +141,9 @@ class Renderer:
             fontsize=6,
             frameon=False,
         )
+
+    def _show(self):
+        """Render the canvas: the RGB array (H, W, 3) in ``rgb_array`` mode, else a window."""
         self.fig.canvas.draw()
         if self.mode == "rgb_array":
             buf = np.asarray(self.fig.canvas.buffer_rgba())

@@ -102,7 +102,7 @@ class GhostModel:
         beta_max = RETRO_LOBE_DEG * np.sqrt(-10.0 * np.log10(MIN_PATTERN_GAIN) / 3.0)
         self._cos_beta_min = float(np.cos(np.radians(beta_max)))
         # Image of a coordinate p along an axis of length L: n L + p (n even) or
-        # (n + 1) L - p (n odd), as in lrp_gym.radar.channel.image_positions.
+        # (n + 1) L - p (n odd), as in lrp_gym.radar.image_lattice.image_positions.
         odd = _IMAGES % 2 == 1
         self._sign = np.where(odd[:, :2], -1.0, 1.0)
         self._offset = np.where(odd, _IMAGES + 1, _IMAGES)[:, :2] * size[:2]

@@ -39,6 +39,7 @@ from scipy.spatial import cKDTree
 
 from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.world import World
 
 
@@ -83,25 +84,8 @@ class LookupTable:
         self.grid_m = float(grid_m)
         layout = world.layout
         self.type_names = layout.type_names
-        size = world.room.size_m[:2]
-        gx = np.arange(grid_m / 2.0, size[0], grid_m)
-        gy = np.arange(grid_m / 2.0, size[1], grid_m)
-        grid_xy = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1)
-        free = world.room.free(grid_xy, clearance_m)
-        xy = grid_xy[free]
-        if len(xy) == 0:
-            raise ValueError("no free grid cell to tabulate")
-        dist = world.true_distances_m(xy)
-        # Column layout: each type's slots, sorted, in type order.
-        self._slices: list[slice] = []
-        cols = []
-        start = 0
-        for t in range(len(layout.types)):
-            d = np.sort(dist[:, layout.type_index == t], axis=1)
-            cols.append(d)
-            self._slices.append(slice(start, start + d.shape[1]))
-            start += d.shape[1]
-        fp = np.concatenate(cols, axis=1)
+        free, xy = _free_cells(world, grid_m, clearance_m)
+        fp, self._slices = _type_sorted_fingerprints(world.true_distances_m(xy), layout)
         q = np.floor(fp / self.resolution_m).astype(np.int64)
         uq, inverse, counts = np.unique(q, axis=0, return_inverse=True, return_counts=True)
         inverse = inverse.reshape(-1)
@@ -109,28 +93,10 @@ class LookupTable:
         self.cell_counts = counts
         region = _regions(free, inverse)
         self.n_regions = int(region.max()) + 1
-        # Each entry's position: the centroid of its largest connected region.
-        region_size = np.bincount(region)
-        region_entry = np.zeros(self.n_regions, dtype=np.int64)
-        region_entry[region] = inverse
-        order = np.lexsort((region_size, region_entry))
-        last = np.r_[region_entry[order][1:] != region_entry[order][:-1], True]
-        main_region = np.empty(self.n_entries, dtype=np.int64)
-        main_region[region_entry[order][last]] = order[last]
-        self.regions_per_entry = np.bincount(region_entry, minlength=self.n_entries)
-        rx = np.bincount(region, xy[:, 0]) / region_size
-        ry = np.bincount(region, xy[:, 1]) / region_size
-        self.positions_m = np.column_stack([rx[main_region], ry[main_region]])
-        # Covariance of all the entry's cells about that position: honest when ambiguous.
-        mx, my = self.positions_m[:, 0], self.positions_m[:, 1]
-        dx, dy = xy[:, 0] - mx[inverse], xy[:, 1] - my[inverse]
-        var_x = np.bincount(inverse, dx * dx) / counts
-        var_y = np.bincount(inverse, dy * dy) / counts
-        cxy = np.bincount(inverse, dx * dy) / counts
-        self._cov_xy = (
-            np.stack([np.stack([var_x, cxy], -1), np.stack([cxy, var_y], -1)], axis=-2)
-            + np.eye(2) * grid_m**2 / 12.0
+        self.positions_m, self.regions_per_entry = _entry_positions(
+            region, inverse, self.n_entries, xy
         )
+        self._cov_xy = _entry_covariances(self.positions_m, inverse, counts, xy, grid_m)
         self.keys_m = (uq + 0.5) * self.resolution_m
         self._trees: dict[tuple[int, ...], cKDTree] = {
             tuple(range(self.keys_m.shape[1])): cKDTree(self.keys_m)
@@ -193,6 +159,80 @@ class LookupTable:
             return PoseEstimate(np.array([*self._room_mean, 0.0]), cov)
         cov[:2, :2] = self._cov_xy[i]
         return PoseEstimate(np.array([*self.positions_m[i], 0.0]), cov)
+
+
+def _free_cells(world: World, grid_m: float, clearance_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """The grid's free mask (nx, ny) and the centres (N, 2) of its free cells."""
+    size = world.room.size_m[:2]
+    gx = np.arange(grid_m / 2.0, size[0], grid_m)
+    gy = np.arange(grid_m / 2.0, size[1], grid_m)
+    grid_xy = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1)
+    free = world.room.free(grid_xy, clearance_m)
+    xy = grid_xy[free]
+    if len(xy) == 0:
+        raise ValueError("no free grid cell to tabulate")
+    return free, xy
+
+
+def _type_sorted_fingerprints(
+    dist_m: np.ndarray, layout: ReflectorLayout
+) -> tuple[np.ndarray, list[slice]]:
+    """Distances (N, M) regrouped as each type's slots, sorted, in type order; and each type's
+    column slice (a reflector's identity within its type is unknown to the radar)."""
+    slices: list[slice] = []
+    cols = []
+    start = 0
+    for t in range(len(layout.types)):
+        d = np.sort(dist_m[:, layout.type_index == t], axis=1)
+        cols.append(d)
+        slices.append(slice(start, start + d.shape[1]))
+        start += d.shape[1]
+    return np.concatenate(cols, axis=1), slices
+
+
+def _entry_positions(
+    region: np.ndarray, inverse: np.ndarray, n_entries: int, xy: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each entry's position (the centroid of its largest connected region) and region count.
+
+    Parameters
+    ----------
+    region : ndarray (N,)
+        Connected-region label of each free cell.
+    inverse : ndarray (N,)
+        Table entry of each free cell.
+    n_entries : int
+    xy : ndarray (N, 2)
+        Cell centres.
+    """
+    n_regions = int(region.max()) + 1
+    region_size = np.bincount(region)
+    region_entry = np.zeros(n_regions, dtype=np.int64)
+    region_entry[region] = inverse
+    order = np.lexsort((region_size, region_entry))
+    last = np.r_[region_entry[order][1:] != region_entry[order][:-1], True]
+    main_region = np.empty(n_entries, dtype=np.int64)
+    main_region[region_entry[order][last]] = order[last]
+    regions_per_entry = np.bincount(region_entry, minlength=n_entries)
+    rx = np.bincount(region, xy[:, 0]) / region_size
+    ry = np.bincount(region, xy[:, 1]) / region_size
+    return np.column_stack([rx[main_region], ry[main_region]]), regions_per_entry
+
+
+def _entry_covariances(
+    positions_m: np.ndarray, inverse: np.ndarray, counts: np.ndarray, xy: np.ndarray, grid_m: float
+) -> np.ndarray:
+    """Covariance (n_entries, 2, 2) of all of an entry's cells about its position, plus the
+    cell's own quantisation variance: honest when the entry is ambiguous."""
+    mx, my = positions_m[:, 0], positions_m[:, 1]
+    dx, dy = xy[:, 0] - mx[inverse], xy[:, 1] - my[inverse]
+    var_x = np.bincount(inverse, dx * dx) / counts
+    var_y = np.bincount(inverse, dy * dy) / counts
+    cxy = np.bincount(inverse, dx * dy) / counts
+    return (
+        np.stack([np.stack([var_x, cxy], -1), np.stack([cxy, var_y], -1)], axis=-2)
+        + np.eye(2) * grid_m**2 / 12.0
+    )
 
 
 def _regions(free: np.ndarray, entry: np.ndarray) -> np.ndarray:

@@ -40,13 +40,64 @@ def plot_ambiguity_map(
 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
-    from matplotlib.colors import ListedColormap
     from matplotlib.legend_handler import HandlerTuple
-    from matplotlib.lines import Line2D
     from matplotlib.patches import Rectangle
 
     fig, ax = plt.subplots(figsize=(6.4, 6.0))
     lx, ly = float(room_size_m[0]), float(room_size_m[1])
+    im, cmap, excluded = _draw_groups(ax, result)
+    _draw_obstacles(ax, obstacles or [])
+    ax.add_patch(Rectangle((0, 0), lx, ly, fill=False, edgecolor="k", linewidth=2, zorder=4))
+    if path_xy_m is not None and len(path_xy_m):
+        _draw_path(ax, np.asarray(path_xy_m, dtype=float))
+    handles, labels = _area_legend(result, cmap, excluded, path_xy_m is not None)
+    _draw_reflectors(ax, reflectors_m, type_index, type_names, handles, labels)
+    _label_axes(ax, result, lx, ly, title)
+    ax.legend(
+        handles,
+        labels,
+        handler_map={tuple: HandlerTuple(ndivide=1)},
+        loc="upper left",
+        bbox_to_anchor=(1.02, 1.0),
+        fontsize=8,
+        frameon=False,
+    )
+    if result.n_groups:
+        bar = fig.colorbar(im, ax=ax, fraction=0.04, pad=0.1, location="bottom", aspect=40)
+        bar.set_label(
+            f"ambiguity group: cells of one colour share a fingerprint ({result.n_groups} groups)",
+            fontsize=8,
+        )
+        bar.set_ticks([])
+    return fig
+
+
+def _label_axes(ax, result: AmbiguityResult, lx: float, ly: float, title: str) -> None:
+    """Room limits with a 5 % margin, equal aspect, axis labels; the title defaults to the
+    ambiguous fractions."""
+    ax.set_xlim(-0.05 * lx, 1.05 * lx)
+    ax.set_ylim(-0.05 * ly, 1.05 * ly)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(
+        title
+        or f"ambiguous {100 * result.ambiguous_fraction:.1f} % "
+        f"(systematic {100 * result.systematic_fraction:.1f} %, "
+        f"random {100 * result.random_fraction:.1f} %)",
+        fontsize=10,
+    )
+
+
+def _draw_groups(ax, result: AmbiguityResult):
+    """Ambiguity groups one colour each (unique cells white), cells not analysed light grey.
+
+    Returns the group image (for the colour bar), its colour map and whether any cell was
+    left out of the analysis.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+
     grid = result.grid
     img = grid.to_image(result.group.astype(float), fill=np.nan)
     img[img < 0] = np.nan  # unique cells: white background
@@ -71,7 +122,14 @@ def plot_ambiguity_map(
             cmap=ListedColormap(["0.85"]),
             interpolation="nearest",
         )
-    for lo, hi in obstacles or []:
+    return im, cmap, bool(excluded.any())
+
+
+def _draw_obstacles(ax, obstacles: list[tuple[np.ndarray, np.ndarray]]) -> None:
+    """Obstacle boxes (min_m, max_m) as hatched grey rectangles."""
+    from matplotlib.patches import Rectangle
+
+    for lo, hi in obstacles:
         ax.add_patch(
             Rectangle(
                 (float(lo[0]), float(lo[1])),
@@ -84,78 +142,49 @@ def plot_ambiguity_map(
                 zorder=3,
             )
         )
-    ax.add_patch(Rectangle((0, 0), lx, ly, fill=False, edgecolor="k", linewidth=2, zorder=4))
-    if path_xy_m is not None and len(path_xy_m):
-        path = np.asarray(path_xy_m, dtype=float)
-        ax.plot(path[:, 0], path[:, 1], "-", color="k", linewidth=1.2, zorder=5)
-        ax.plot(path[:, 0], path[:, 1], "o", color="k", markersize=3, zorder=5)
-        for k, (x, y) in enumerate(path, start=1):
-            ax.annotate(
-                str(k), (x, y), textcoords="offset points", xytext=(3, 3), fontsize=7, zorder=6
-            )
+
+
+def _draw_path(ax, path: np.ndarray) -> None:
+    """The task path (K, 2) as a black polyline with its waypoints numbered from 1."""
+    ax.plot(path[:, 0], path[:, 1], "-", color="k", linewidth=1.2, zorder=5)
+    ax.plot(path[:, 0], path[:, 1], "o", color="k", markersize=3, zorder=5)
+    for k, (x, y) in enumerate(path, start=1):
+        ax.annotate(str(k), (x, y), textcoords="offset points", xytext=(3, 3), fontsize=7, zorder=6)
+
+
+def _draw_reflectors(
+    ax,
+    reflectors_m: np.ndarray,
+    type_index: np.ndarray,
+    type_names: tuple[str, ...],
+    handles: list,
+    labels: list[str],
+) -> None:
+    """Each type's reflectors as a white marker with a black x; appends their legend entries."""
+    from matplotlib.lines import Line2D
+
     refl = np.asarray(reflectors_m, dtype=float)
-    handles, labels = _area_legend(result, cmap, excluded.any(), path_xy_m is not None)
     for t, name in enumerate(type_names):
         sel = np.asarray(type_index) == t
-        if sel.any():
-            ax.scatter(
-                refl[sel, 0],
-                refl[sel, 1],
-                marker=_MARKERS[t % len(_MARKERS)],
-                s=90,
-                facecolor="white",
-                edgecolor="k",
-                linewidth=1.8,
-                zorder=7,
-                label=f"LRP type {name}",
-            )
-            ax.scatter(refl[sel, 0], refl[sel, 1], marker="x", s=40, color="k", zorder=8)
-            # The legend shows the same marker as the map: white shape with a black x.
-            handles.append(
-                (
-                    Line2D(
-                        [],
-                        [],
-                        marker=_MARKERS[t % len(_MARKERS)],
-                        ls="none",
-                        ms=9,
-                        mfc="white",
-                        mec="k",
-                        mew=1.8,
-                    ),
-                    Line2D([], [], marker="x", ls="none", ms=6, color="k"),
-                )
-            )
-            labels.append(f"LRP type {name}")
-    ax.set_xlim(-0.05 * lx, 1.05 * lx)
-    ax.set_ylim(-0.05 * ly, 1.05 * ly)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_title(
-        title
-        or f"ambiguous {100 * result.ambiguous_fraction:.1f} % "
-        f"(systematic {100 * result.systematic_fraction:.1f} %, "
-        f"random {100 * result.random_fraction:.1f} %)",
-        fontsize=10,
-    )
-    ax.legend(
-        handles,
-        labels,
-        handler_map={tuple: HandlerTuple(ndivide=1)},
-        loc="upper left",
-        bbox_to_anchor=(1.02, 1.0),
-        fontsize=8,
-        frameon=False,
-    )
-    if result.n_groups:
-        bar = fig.colorbar(im, ax=ax, fraction=0.04, pad=0.1, location="bottom", aspect=40)
-        bar.set_label(
-            f"ambiguity group: cells of one colour share a fingerprint ({result.n_groups} groups)",
-            fontsize=8,
+        if not sel.any():
+            continue
+        marker = _MARKERS[t % len(_MARKERS)]
+        ax.scatter(
+            refl[sel, 0],
+            refl[sel, 1],
+            marker=marker,
+            s=90,
+            facecolor="white",
+            edgecolor="k",
+            linewidth=1.8,
+            zorder=7,
+            label=f"LRP type {name}",
         )
-        bar.set_ticks([])
-    return fig
+        ax.scatter(refl[sel, 0], refl[sel, 1], marker="x", s=40, color="k", zorder=8)
+        # The legend shows the same marker as the map: white shape with a black x.
+        shape = Line2D([], [], marker=marker, ls="none", ms=9, mfc="white", mec="k", mew=1.8)
+        handles.append((shape, Line2D([], [], marker="x", ls="none", ms=6, color="k")))
+        labels.append(f"LRP type {name}")
 
 
 def _area_legend(result: AmbiguityResult, cmap, excluded: bool, path: bool):

@@ -235,6 +235,43 @@ def random_search(
     )
 
 
+class _BudgetedObjective:
+    """Differential evolution's objective on a budget of ``candidates`` grid evaluations.
+
+    An infeasible layout scores ``1 + violation`` without a grid evaluation (so it does not use
+    up the budget); a feasible one its coarse ambiguous fraction, recorded in ``seen`` and
+    ``scores``; once the budget is spent every layout scores 2 and ``spent`` turns true.
+    """
+
+    def __init__(
+        self, problem: PlacementProblem, candidates: int, progress: Progress | None
+    ) -> None:
+        self.problem = problem
+        self.candidates = candidates
+        self.progress = progress
+        self.seen: list[np.ndarray] = []
+        self.scores: list[float] = []
+
+    @property
+    def spent(self) -> bool:
+        """True once ``candidates`` layouts have been evaluated."""
+        return len(self.scores) >= self.candidates
+
+    def __call__(self, x: np.ndarray) -> float:
+        xy = x.reshape(self.problem.n_reflectors, 2)
+        v = float(self.problem.violation(xy))
+        if v > 0.0:
+            return 1.0 + v
+        if self.spent:
+            return 2.0  # budget spent: the callback stops the run after this generation
+        s = self.problem.score(xy)
+        self.seen.append(xy.copy())
+        self.scores.append(s)
+        if self.progress is not None:
+            self.progress(len(self.scores), self.candidates)
+        return s
+
+
 def optimise_search(
     problem: PlacementProblem,
     candidates: int,
@@ -258,23 +295,7 @@ def optimise_search(
     init = problem.sample(rng, pop).reshape(pop, 2 * m)
     lo, hi = problem.bounds()
     bounds = list(zip(np.tile(lo, m), np.tile(hi, m), strict=True))
-    seen: list[np.ndarray] = []
-    scores: list[float] = []
-
-    def objective(x: np.ndarray) -> float:
-        xy = x.reshape(m, 2)
-        v = float(problem.violation(xy))
-        if v > 0.0:
-            return 1.0 + v
-        if len(scores) >= candidates:
-            return 2.0  # budget spent: the callback stops the run after this generation
-        s = problem.score(xy)
-        seen.append(xy.copy())
-        scores.append(s)
-        if progress is not None:
-            progress(len(scores), candidates)
-        return s
-
+    objective = _BudgetedObjective(problem, candidates, progress)
     differential_evolution(
         objective,
         bounds,
@@ -283,17 +304,17 @@ def optimise_search(
         tol=0.0,
         polish=False,
         rng=rng,
-        callback=lambda *_a, **_k: len(scores) >= candidates,
+        callback=lambda *_a, **_k: objective.spent,
     )
-    layouts = np.array(seen)
-    score_arr = np.array(scores)
+    layouts = np.array(objective.seen)
+    score_arr = np.array(objective.scores)
     best, fine, refined = _refine(problem, layouts, score_arr, refine_top)
     return SearchResult(
         "optimize",
         problem.positions(layouts[best]),
         fine,
         float(score_arr[best]),
-        len(scores),
+        len(objective.scores),
         refined,
         time.perf_counter() - start,
         score_arr,

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from lrp_gym.config import ScenarioConfig, load_scenario
-from lrp_gym.radar.channel import Paths
+from lrp_gym.radar.paths import Paths
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world.world import World
 

@@ -13,7 +13,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from lrp_gym.config import ScenarioConfig
+from lrp_gym.config import ScenarioConfig, TrackingConfig
+from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world.world import World
 
@@ -96,9 +97,7 @@ def lrp_detection_rate(
     rng = np.random.default_rng(seed)
     poses, vels = random_poses(world, n_poses, rng, cfg.robot.radius_m, cfg.robot.max_speed_mps)
     lay = world.layout
-    peak = np.array([t.rcs_dbsm for t in lay.types])[lay.type_index]
-    tr = cfg.tracking
-    low, high = peak - tr.rcs_tolerance_db - tr.rcs_pattern_loss_db, peak + tr.rcs_tolerance_db
+    peak, low, high = _rcs_window(world, cfg.tracking)
     ok, near, rcs_err, rng_err, counts = [], [], [], [], []
     for pose, vel in zip(poses, vels, strict=True):
         det = sensor.measure(pose, vel, rng)
@@ -108,11 +107,9 @@ def lrp_detection_rate(
             ok.extend([False] * len(true))
             near.extend([False] * len(true))
             continue
-        err = det.range_m[None, :] - true[:, None]  # (M, D)
-        close = np.abs(err) <= tolerance_m
-        good = close & (det.rcs_dbsm >= low[:, None]) & (det.rcs_dbsm <= high[:, None])
-        near.extend(close.any(axis=1))
-        ok.extend(good.any(axis=1))
+        close, good, err = _match(det, true, tolerance_m, low, high)
+        near.extend(np.asarray(close.any(axis=1)))
+        ok.extend(np.asarray(good.any(axis=1)))
         for m in np.flatnonzero(good.any(axis=1)):
             j = np.flatnonzero(good[m])[np.argmin(np.abs(err[m, good[m]]))]
             rcs_err.append(det.rcs_dbsm[j] - peak[m])
@@ -127,3 +124,22 @@ def lrp_detection_rate(
         n_lrps=len(lay),
         per_lrp_rate=tuple(float(r) for r in np.reshape(ok, (n_poses, len(lay))).mean(axis=0)),
     )
+
+
+def _rcs_window(world: World, tracking: TrackingConfig) -> tuple[np.ndarray, ...]:
+    """Per LRP (M,): its type's peak RCS and the tracker's RCS window around it (dBsm)."""
+    lay = world.layout
+    peak = np.array([t.rcs_dbsm for t in lay.types])[lay.type_index]
+    low = peak - tracking.rcs_tolerance_db - tracking.rcs_pattern_loss_db
+    return peak, low, peak + tracking.rcs_tolerance_db
+
+
+def _match(
+    det: Detections, true_m: np.ndarray, tolerance_m: float, low: np.ndarray, high: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which detections (D,) lie within the tolerance of each LRP (M,) and which of those have
+    an RCS in its window, as (M, D) masks; and the range errors (M, D)."""
+    err = det.range_m[None, :] - true_m[:, None]  # (M, D)
+    close = np.abs(err) <= tolerance_m
+    good = close & (det.rcs_dbsm >= low[:, None]) & (det.rcs_dbsm <= high[:, None])
+    return close, good, err

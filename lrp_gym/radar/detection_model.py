@@ -31,8 +31,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from lrp_gym.radar._merge import greedy_owner
-from lrp_gym.radar.channel import Paths
 from lrp_gym.radar.detections import Detections
+from lrp_gym.radar.paths import Paths
 from lrp_gym.radar.processing import window, window_dtft
 
 if TYPE_CHECKING:
@@ -88,18 +88,41 @@ class FastDetectionModel:
         return idx * self.step
 
     def detect(self, paths: Paths, rng: np.random.Generator) -> Detections:
+        """Detections of one frame from its paths (steps 1-6 of the module docstring)."""
         s = self.sensor
-        fm, proc, cfar = s.fmcw, s.processor, s.cfar
-        ns, nc = self.ns, self.nc
-        noise_on = s.noise_on
-        cell = s.noise_cell
+        fm, cell = s.fmcw, s.noise_cell
+        crb, cdb, cpk = self._merge(paths)
+        g, clean, meas = self._peaks(cpk, rng)
+        thr = self._threshold()
+        det = (meas > thr) & ~self._masked(meas, clean, crb, cdb)
+        rng_m, vel = self._positions(crb[det], cdb[det], clean[det], rng)
+        power_w = meas[det] / (s.processor.coherent_gain2 * g[det] ** 2)
+        snr_db = 10.0 * np.log10(meas[det] / cell)
+        if s.noise_on:
+            rng_m, vel, snr_db, power_w = self._false_alarms(rng_m, vel, snr_db, power_w, thr, rng)
+        keep = (rng_m >= s.min_range_m) & (rng_m <= fm.max_range_m)
+        power_w = power_w[keep]
+        return Detections(
+            range_m=rng_m[keep],
+            velocity_mps=vel[keep],
+            power_dbm=10.0 * np.log10(power_w) + 30.0,
+            rcs_dbsm=s.rcs_dbsm(power_w, rng_m[keep]),
+            snr_db=snr_db[keep],
+        )
+
+    def _merge(self, paths: Paths) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Steps 1-2: each merged peak's range and Doppler bin (H,) and its coherent power.
+
+        Paths within one resolution cell of a stronger one (greedy by power) merge into it:
+        power-weighted centroid, coherent sum weighted by the window response at the offset.
+        """
+        fm, proc, nc = self.sensor.fmcw, self.sensor.processor, self.nc
         coupling = 2.0 * paths.velocity_mps * fm.chirp_period_s / fm.wavelength_m
         order = np.argsort(-paths.power_w)
         rb = (paths.range_m / fm.range_resolution_m + coupling)[order]
         db = (paths.velocity_mps / fm.velocity_resolution_mps)[order]  # from 0 velocity
         peak = paths.power_w[order] * proc.coherent_gain2
         phase = paths.phase_rad[order]
-        # --- merge paths within one resolution cell of a stronger one (greedy by power)
         owner = greedy_owner(rb, db, self.res_r, self.res_d, nc)
         heads = np.flatnonzero(owner == np.arange(len(rb)))
         wsum = np.bincount(owner, weights=peak, minlength=len(rb))[heads]
@@ -118,21 +141,32 @@ class FastDetectionModel:
             np.bincount(owner, weights=z.real, minlength=len(rb))[heads]
             + 1j * np.bincount(owner, weights=z.imag, minlength=len(rb))[heads]
         )
-        cpk = np.abs(amp) ** 2
-        # --- scalloping at a random sub-bin offset, noise on the peak
-        nh = len(heads)
+        return crb, cdb, np.abs(amp) ** 2
+
+    def _peaks(
+        self, cpk: np.ndarray, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Step 3: scalloping amplitude gain at a random sub-bin offset, the clean peak power
+        and the measured one (plus complex Gaussian noise of one map cell when noise is on)."""
+        proc, nh = self.sensor.processor, len(cpk)
         g = np.interp(
             rng.uniform(-0.5, 0.5, nh), proc.range_table.offset, proc.range_table.gain
         ) * np.interp(
             rng.uniform(-0.5, 0.5, nh), proc.doppler_table.offset, proc.doppler_table.gain
         )
         clean = cpk * g**2
-        if noise_on:
-            zn = rng.standard_normal(nh) + 1j * rng.standard_normal(nh)
-            meas = np.abs(np.sqrt(clean) + np.sqrt(cell / 2.0) * zn) ** 2
-        else:
-            meas = clean
-        # --- OS-CFAR: count training cells raised above meas / alpha by any peak
+        if not self.sensor.noise_on:
+            return g, clean, clean
+        zn = rng.standard_normal(nh) + 1j * rng.standard_normal(nh)
+        meas = np.abs(np.sqrt(clean) + np.sqrt(self.sensor.noise_cell / 2.0) * zn) ** 2
+        return g, clean, meas
+
+    def _masked(
+        self, meas: np.ndarray, clean: np.ndarray, crb: np.ndarray, cdb: np.ndarray
+    ) -> np.ndarray:
+        """Step 4: peaks (H,) whose CFAR training ring has too many cells raised above
+        ``meas / alpha`` by the sidelobes of any peak (itself included)."""
+        cfar, nc = self.sensor.cfar, self.nc
         level = meas / self.alpha  # (H,)
         ratio = level[:, None] / np.maximum(clean[None, :], 1e-300)  # (i, j)
         ext_r = self._extent(self.env_r, ratio)
@@ -141,50 +175,65 @@ class FastDetectionModel:
         rel_r = crb[None, :] - ri[:, None]
         rel_k = (cdb[None, :] - ki[:, None] + nc / 2) % nc - nc / 2
         (g0, g1), (h0, h1) = cfar.guard, cfar.half_window
-
-        def overlap(rel, ext, half):
-            """Integers in [-half, half] strictly within ext of rel."""
-            lo = np.maximum(np.floor(rel - ext) + 1, -half)
-            hi = np.minimum(np.ceil(rel + ext) - 1, half)
-            return np.where(ext > 0, np.maximum(hi - lo + 1, 0), 0)
-
-        occupied = overlap(rel_r, ext_r, h0) * overlap(rel_k, ext_d, h1) - overlap(
+        occupied = _overlap(rel_r, ext_r, h0) * _overlap(rel_k, ext_d, h1) - _overlap(
             rel_r, ext_r, g0
-        ) * overlap(rel_k, ext_d, g1)
-        masked = occupied.sum(axis=1) > self.max_occupied
-        thr = self.alpha * self.noise_stat * cell
-        if not noise_on:
-            thr = -math.log(cfar.pfa) * cell
-        det = (meas > thr) & ~masked
-        snr = clean[det] / cell
-        n = int(det.sum())
+        ) * _overlap(rel_k, ext_d, g1)
+        return occupied.sum(axis=1) > self.max_occupied
+
+    def _threshold(self) -> float:
+        """Step 4: the detection threshold, ``alpha`` times the noise statistic of one cell
+        (without noise: the level a noise-only cell would exceed with probability Pfa)."""
+        s = self.sensor
+        if not s.noise_on:
+            return -math.log(s.cfar.pfa) * s.noise_cell
+        return self.alpha * self.noise_stat * s.noise_cell
+
+    def _positions(
+        self, crb: np.ndarray, cdb: np.ndarray, clean: np.ndarray, rng: np.random.Generator
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Step 5: range (m) and folded velocity (m/s) of the detected peaks, with the fitted
+        interpolation error when noise is on and the range-Doppler coupling removed."""
+        s = self.sensor
+        fm = s.fmcw
+        snr = clean / s.noise_cell
+        n = len(crb)
         sig = 1.0 / np.sqrt(np.maximum(2.0 * snr, 1e-12))
-        err_r = rng.standard_normal(n) * RANGE_ERROR_K * sig if noise_on else np.zeros(n)
-        err_d = rng.standard_normal(n) * DOPPLER_ERROR_K * sig if noise_on else np.zeros(n)
-        vel = (cdb[det] + err_d) * fm.velocity_resolution_mps
+        err_r = rng.standard_normal(n) * RANGE_ERROR_K * sig if s.noise_on else np.zeros(n)
+        err_d = rng.standard_normal(n) * DOPPLER_ERROR_K * sig if s.noise_on else np.zeros(n)
+        vel = (cdb + err_d) * fm.velocity_resolution_mps
         vmax = fm.max_velocity_mps
         vel = (vel + vmax) % (2.0 * vmax) - vmax
-        rng_bins = crb[det] + err_r - 2.0 * vel * fm.chirp_period_s / fm.wavelength_m
-        rng_m = rng_bins * fm.range_resolution_m
-        power_w = meas[det] / (proc.coherent_gain2 * g[det] ** 2)
-        snr_db = 10.0 * np.log10(meas[det] / cell)
-        # --- noise false alarms
-        if noise_on:
-            n_fa = rng.poisson(cfar.pfa * ns * nc)
-            if n_fa:
-                fa_r = rng.uniform(1, ns - 1, n_fa)
-                fa_v = rng.uniform(-vmax, vmax, n_fa)
-                fa_p = thr * (1.0 + rng.exponential(1.0 / self.alpha, n_fa))
-                rng_m = np.concatenate([rng_m, fa_r * fm.range_resolution_m])
-                vel = np.concatenate([vel, fa_v])
-                snr_db = np.concatenate([snr_db, 10.0 * np.log10(fa_p / cell)])
-                power_w = np.concatenate([power_w, fa_p / proc.coherent_gain2])
-        keep = (rng_m >= s.min_range_m) & (rng_m <= fm.max_range_m)
-        power_w = power_w[keep]
-        return Detections(
-            range_m=rng_m[keep],
-            velocity_mps=vel[keep],
-            power_dbm=10.0 * np.log10(power_w) + 30.0,
-            rcs_dbsm=s.rcs_dbsm(power_w, rng_m[keep]),
-            snr_db=snr_db[keep],
+        rng_bins = crb + err_r - 2.0 * vel * fm.chirp_period_s / fm.wavelength_m
+        return rng_bins * fm.range_resolution_m, vel
+
+    def _false_alarms(
+        self,
+        rng_m: np.ndarray,
+        vel: np.ndarray,
+        snr_db: np.ndarray,
+        power_w: np.ndarray,
+        thr: float,
+        rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Step 6: append a Poisson number (Pfa per cell) of noise detections at random cells."""
+        fm, cfar, cell = self.sensor.fmcw, self.sensor.cfar, self.sensor.noise_cell
+        vmax = fm.max_velocity_mps
+        n_fa = rng.poisson(cfar.pfa * self.ns * self.nc)
+        if not n_fa:
+            return rng_m, vel, snr_db, power_w
+        fa_r = rng.uniform(1, self.ns - 1, n_fa)
+        fa_v = rng.uniform(-vmax, vmax, n_fa)
+        fa_p = thr * (1.0 + rng.exponential(1.0 / self.alpha, n_fa))
+        return (
+            np.concatenate([rng_m, fa_r * fm.range_resolution_m]),
+            np.concatenate([vel, fa_v]),
+            np.concatenate([snr_db, 10.0 * np.log10(fa_p / cell)]),
+            np.concatenate([power_w, fa_p / self.sensor.processor.coherent_gain2]),
         )
+
+
+def _overlap(rel: np.ndarray, ext: np.ndarray, half: int) -> np.ndarray:
+    """Integers in [-half, half] strictly within ext of rel."""
+    lo = np.maximum(np.floor(rel - ext) + 1, -half)
+    hi = np.minimum(np.ceil(rel + ext) - 1, half)
+    return np.where(ext > 0, np.maximum(hi - lo + 1, 0), 0)

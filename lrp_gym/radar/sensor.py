@@ -17,10 +17,11 @@ import numpy as np
 from lrp_gym.config import RadarConfig
 from lrp_gym.radar.antenna import ZenithPattern
 from lrp_gym.radar.cfar import Cfar2D
-from lrp_gym.radar.channel import Channel, Paths
+from lrp_gym.radar.channel import Channel
 from lrp_gym.radar.detection_model import FastDetectionModel
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.frontend import beat_cube, link_constant_w_m2, noise_power_w
+from lrp_gym.radar.paths import Paths
 from lrp_gym.radar.processing import RangeDopplerProcessor
 from lrp_gym.world.world import World
 

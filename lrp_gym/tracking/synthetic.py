@@ -97,37 +97,83 @@ def synthetic_stream(
         np.maximum(world.layout.effective_rcs_m2(world.radar_position(xy)), 1e-30)
     )
     peaks = np.array([t.rcs_dbsm for t in world.layout.types])
-    n_frames, n_refl = truth.shape
+    noise = (range_std_m, velocity_std_mps, rcs_std_db)
     frames: list[Detections] = []
-    for k in range(n_frames):
-        seen = rng.random(n_refl) >= miss_probability
-        seen &= np.isfinite(rcs_true[k]) & (rcs_true[k] > -100.0)
-        for m, (first, count) in (dropouts or {}).items():
-            if first <= k < first + count:
-                seen[m] = False
-        n = int(seen.sum())
-        rng_m = list(truth[k, seen] + rng.normal(0.0, range_std_m, n))
-        vel = list(rates[k, seen] + rng.normal(0.0, velocity_std_mps, n))
-        rcs = list(rcs_true[k, seen] + rng.normal(0.0, rcs_std_db, n))
-        n_clutter = int(rng.poisson(clutter_per_frame))
-        rng_m += list(rng.uniform(*clutter_range_m, n_clutter))
-        vel += list(rng.uniform(-2.0, 2.0, n_clutter))
-        rcs += list(peaks[rng.integers(0, len(peaks), n_clutter)] + rng.normal(0.0, 2.0, n_clutter))
+    for k in range(truth.shape[0]):
+        seen = _seen(rng, rcs_true[k], miss_probability, k, dropouts)
+        rng_m, vel, rcs = _reflector_returns(rng, truth[k], rates[k], rcs_true[k], seen, noise)
+        _add_clutter(rng, rng_m, vel, rcs, clutter_per_frame, clutter_range_m, peaks)
         if wall is not None and abs(k - wall.crossing_frame) <= wall.frames // 2:
             t_rel = trajectory.times_s[k] - trajectory.times_s[wall.crossing_frame]
             m = wall.reflector
             rng_m.append(truth[k, m] + wall.rate_mps * t_rel + rng.normal(0.0, range_std_m))
             vel.append(rates[k, m] + wall.rate_mps + rng.normal(0.0, velocity_std_mps))
             rcs.append(peaks[world.layout.type_index[m]] + wall.rcs_offset_db)
-        order = rng.permutation(len(rng_m))  # the radar reports in no particular order
-        r = np.asarray(rng_m)[order]
-        frames.append(
-            Detections(
-                range_m=r,
-                velocity_mps=np.asarray(vel)[order],
-                power_dbm=np.zeros(len(r)),
-                rcs_dbsm=np.asarray(rcs)[order],
-                snr_db=np.full(len(r), 20.0),
-            )
-        )
+        frames.append(_shuffled_detections(rng, rng_m, vel, rcs))
     return frames, truth
+
+
+def _seen(
+    rng: np.random.Generator,
+    rcs_true_db: np.ndarray,
+    miss_probability: float,
+    k: int,
+    dropouts: dict[int, tuple[int, int]] | None,
+) -> np.ndarray:
+    """Which reflectors (M,) are detected in frame ``k``: not missed, visible, not dropped out."""
+    seen = rng.random(len(rcs_true_db)) >= miss_probability
+    seen &= np.isfinite(rcs_true_db) & (rcs_true_db > -100.0)
+    for m, (first, count) in (dropouts or {}).items():
+        if first <= k < first + count:
+            seen[m] = False
+    return seen
+
+
+def _reflector_returns(
+    rng: np.random.Generator,
+    truth_m: np.ndarray,
+    rates_mps: np.ndarray,
+    rcs_true_db: np.ndarray,
+    seen: np.ndarray,
+    noise: tuple[float, float, float],
+) -> tuple[list[float], list[float], list[float]]:
+    """Noisy range, radial velocity and RCS of the seen reflectors (lists, to append to)."""
+    range_std_m, velocity_std_mps, rcs_std_db = noise
+    n = int(seen.sum())
+    rng_m = list(truth_m[seen] + rng.normal(0.0, range_std_m, n))
+    vel = list(rates_mps[seen] + rng.normal(0.0, velocity_std_mps, n))
+    rcs = list(rcs_true_db[seen] + rng.normal(0.0, rcs_std_db, n))
+    return rng_m, vel, rcs
+
+
+def _add_clutter(
+    rng: np.random.Generator,
+    rng_m: list[float],
+    vel: list[float],
+    rcs: list[float],
+    clutter_per_frame: float,
+    clutter_range_m: tuple[float, float],
+    peaks_dbsm: np.ndarray,
+) -> None:
+    """Append a Poisson number of clutter detections with the RCS of a random reflector type."""
+    n_clutter = int(rng.poisson(clutter_per_frame))
+    rng_m += list(rng.uniform(*clutter_range_m, n_clutter))
+    vel += list(rng.uniform(-2.0, 2.0, n_clutter))
+    rcs += list(
+        peaks_dbsm[rng.integers(0, len(peaks_dbsm), n_clutter)] + rng.normal(0.0, 2.0, n_clutter)
+    )
+
+
+def _shuffled_detections(
+    rng: np.random.Generator, rng_m: list[float], vel: list[float], rcs: list[float]
+) -> Detections:
+    """The frame's detections in random order (the radar reports in no particular order)."""
+    order = rng.permutation(len(rng_m))
+    r = np.asarray(rng_m)[order]
+    return Detections(
+        range_m=r,
+        velocity_mps=np.asarray(vel)[order],
+        power_dbm=np.zeros(len(r)),
+        rcs_dbsm=np.asarray(rcs)[order],
+        snr_db=np.full(len(r), 20.0),
+    )

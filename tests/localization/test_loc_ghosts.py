@@ -8,7 +8,7 @@ import pytest
 from lrp_gym.config import load_scenario
 from lrp_gym.localization.ghosts import _FIRST, _IMAGES, FAR_M, GhostModel
 from lrp_gym.localization.likelihood import FingerprintModel
-from lrp_gym.radar.channel import KIND_DIRECT, KIND_REFLECTOR_MULTIPATH
+from lrp_gym.radar.paths import KIND_DIRECT, KIND_REFLECTOR_MULTIPATH
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world import World

@@ -74,7 +74,7 @@ def test_structure_model_predicts_every_room_path_of_the_channel(paper_cfg, pape
     """Every specular room return that the radar's image-source channel produces (up to two
     bounces, empty shoebox) has a predicted range and radial velocity in the structure model:
     an unpredicted one would be a systematic outlier that favours wrong poses."""
-    from lrp_gym.radar.channel import KIND_SURFACE
+    from lrp_gym.radar.paths import KIND_SURFACE
     from lrp_gym.radar.sensor import RadarSensor
     from lrp_gym.world.structure import structure_velocities_mps
 

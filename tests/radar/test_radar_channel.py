@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from lrp_gym.radar.antenna import ZenithPattern
-from lrp_gym.radar.channel import (
+from lrp_gym.radar.paths import (
     KIND_DIRECT,
     KIND_OBSTACLE_FACE,
     KIND_REFLECTOR_MULTIPATH,

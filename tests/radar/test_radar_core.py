@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from lrp_gym.radar.cfar import Cfar2D
-from lrp_gym.radar.channel import KIND_DIRECT, KIND_SURFACE, image_positions, lattice_indices
 from lrp_gym.radar.frontend import beat_cube
+from lrp_gym.radar.image_lattice import image_positions, lattice_indices
+from lrp_gym.radar.paths import KIND_DIRECT, KIND_SURFACE
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world import World
 
