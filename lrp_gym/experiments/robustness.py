@@ -117,6 +117,34 @@ def run_cell(
     return cell_statistics(name, severity, results, recov, rng)
 
 
+def suspect_counts(results: Sequence[EpisodeResult]) -> tuple[int, int, int]:
+    """The reflector monitor's score: (episodes naming a moved or vanished reflector within
+    :data:`SUSPECT_BUDGET_FRAMES`, episodes with such a reflector, episodes naming another)."""
+    budget = SUSPECT_BUDGET_FRAMES
+    perturbed = [r for r in results if r.perturbed_reflectors]
+    named = sum(
+        any(r.suspect_first_frame.get(j, budget + 1) <= budget for j in r.perturbed_reflectors)
+        for r in perturbed
+    )
+    others = sum(bool(set(r.suspect_first_frame) - set(r.perturbed_reflectors)) for r in results)
+    return named, len(perturbed), others
+
+
+def _suspect_statistics(results: Sequence[EpisodeResult]) -> tuple[dict, dict]:
+    """The cell's reflector-monitor rates and their Wilson intervals."""
+    named, n_perturbed, others = suspect_counts(results)
+    n = len(results)
+    values = {
+        "suspect_named_within_budget": named / n_perturbed if n_perturbed else None,
+        "false_suspect_rate": others / n,
+    }
+    ci = {
+        "suspect_named_within_budget": wilson_interval(named, n_perturbed) if n_perturbed else None,
+        "false_suspect_rate": wilson_interval(others, n),
+    }
+    return values, ci
+
+
 def cell_statistics(
     name: str,
     severity: float,
@@ -124,13 +152,9 @@ def cell_statistics(
     recov: Sequence[int | None],
     rng: np.random.Generator,
 ) -> dict[str, Any]:
-    """One cell's numbers and their 95 % intervals (``ci95``, same keys).
-
-    Rates over episodes (success, collision, kidnap recovered within the budget) get Wilson
-    intervals. Statistics pooled over steps (error percentiles, share of steps localised,
-    confidently wrong share) and per-episode medians (frames to localise, recovery frames) get
-    a percentile bootstrap over whole episodes, because steps of one episode are correlated.
-    """
+    """One cell's numbers and their 95 % intervals (``ci95``, same keys): Wilson for rates
+    over episodes; for statistics pooled over steps and per-episode medians a percentile
+    bootstrap over whole episodes (steps of one episode are correlated)."""
     n = len(results)
     s = summarize(list(results))
     errs = [r.loc_error_m for r in results]
@@ -145,18 +169,7 @@ def cell_statistics(
     wrong = [r.loc_error_m[r.converged] > CONFIDENTLY_WRONG_M for r in results]
     n_succ = sum(bool(r.success) for r in results)
     n_coll = sum(bool(r.collision) for r in results)
-    # Reflector monitor: a perturbed reflector named within the budget; any other one named.
-    perturbed = [r for r in results if r.perturbed_reflectors]
-    named = sum(
-        any(
-            r.suspect_first_frame.get(j, SUSPECT_BUDGET_FRAMES + 1) <= SUSPECT_BUDGET_FRAMES
-            for j in r.perturbed_reflectors
-        )
-        for r in perturbed
-    )
-    false_named = sum(
-        bool(set(r.suspect_first_frame) - set(r.perturbed_reflectors)) for r in results
-    )
+    suspects, suspects_ci = _suspect_statistics(results)
 
     def boot(items, stat):
         return bootstrap_interval(items, stat, rng)
@@ -171,10 +184,7 @@ def cell_statistics(
         "median_frames_to_localised": boot(to_loc, median_of),
         "recovery_frames": boot(list(recov), median_of),
         "recovered_within_budget": wilson_interval(within, kidnapped) if kidnapped else None,
-        "suspect_named_within_budget": wilson_interval(named, len(perturbed))
-        if perturbed
-        else None,
-        "false_suspect_rate": wilson_interval(false_named, n),
+        **suspects_ci,
     }
     return {
         "perturbation": name,
@@ -191,8 +201,7 @@ def cell_statistics(
         "recovery_frames": float(np.median(done)) if done else None,
         "recovery_frames_per_episode": list(recov),
         "recovered_within_budget": within / kidnapped if kidnapped else None,
-        "suspect_named_within_budget": named / len(perturbed) if perturbed else None,
-        "false_suspect_rate": false_named / n,
+        **suspects,
         "ci95": {k: None if v is None else [v[0], v[1]] for k, v in ci.items()},
     }
 
