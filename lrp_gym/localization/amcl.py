@@ -33,16 +33,12 @@ import numpy as np
 
 from lrp_gym.config import LocalizationConfig, ScenarioError
 from lrp_gym.localization.kld import KldBinner, kld_particle_count
-from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.localization.likelihood import FingerprintModel, frame_fit
 from lrp_gym.localization.particle_motion import odometry_noise, sample_motion
 from lrp_gym.localization.particle_statistics import (
-    best_k_mean,
-    circular_mean,
     cluster_labels,
-    clusters,
-    pose_covariance,
 )
-from lrp_gym.localization.pose_estimate import PoseEstimate
+from lrp_gym.localization.pose_estimate import PoseEstimate, cloud_estimate
 from lrp_gym.localization.proposal import LostTest, MeasurementGrid
 from lrp_gym.localization.resampling import (
     effective_sample_size,
@@ -56,8 +52,6 @@ from lrp_gym.world.world import World
 _FIT_SAMPLE = 256
 #: Below this speed the Doppler of static returns carries no heading information.
 _MIN_DOPPLER_SPEED_MPS = 0.05
-#: A mode must hold this share of the posterior to count in ``PoseEstimate.n_modes``.
-_MODE_MASS = 0.05
 #: Bins lighter than this share of the weight belong to no mode when resampling.
 _MODE_BIN_MASS = 1e-5
 
@@ -304,7 +298,7 @@ class Amcl:
     ) -> None:
         """Augmented MCL's short- and long-term averages of the measurement fit.
 
-        The averaged quantity is :meth:`FingerprintModel.distance_fit` of the predicted
+        The averaged quantity is :meth:`FingerprintModel.distance_fits` of the predicted
         particles rather than their mean likelihood: the likelihood is a product over the
         measured distances, so its scale changes by orders of magnitude with the number of
         distances and with one clutter distance, which the averages would read as a kidnap.
@@ -316,11 +310,9 @@ class Amcl:
         fits = self.model.distance_fits(
             particles[::stride, :2], prior_weights[::stride], fingerprint
         )
-        if len(fits) == 0:
+        fit = frame_fit(fits)
+        if fit is None:
             return
-        if len(fits) >= 3:  # a missed reflector plus a clutter distance: leave out the worst
-            fits = np.delete(fits, np.argmin(fits))
-        fit = max(float(np.mean(fits)), 1e-12)
         # Running means until 1/k falls below alpha (bias-corrected averages): the first
         # fit initialises both, and the long-term one is not anchored to the low fits of a
         # uniform prior's first frames.
@@ -336,32 +328,8 @@ class Amcl:
         return self._estimate(effective_sample_size(self.weights))
 
     def _estimate(self, ess: float) -> PoseEstimate:
-        cfg = self.cfg
-        sel, masses = clusters(self.particles, self.weights, cfg.kld_bin_m, self._size_xy)
-        mass = float(masses[0]) if len(masses) else 0.0
-        sub = self.particles[sel]
-        w_sel = self.weights[sel]
-        total = float(np.sum(w_sel))
-        w_n = w_sel / total if total > 0.0 else np.full(len(sub), 1.0 / len(sub))
-        mean_xy = w_n @ sub[:, :2]
-        if cfg.estimator == "cluster":
-            pose = np.array([mean_xy[0], mean_xy[1], circular_mean(sub[:, 2], w_n)])
-        else:
-            pose = best_k_mean(
-                self.particles, self.weights, cfg.estimate_best_k, cfg.estimate_radius_m
-            )
-        cov = pose_covariance(self.particles, self.weights, pose)
-        # Converged: one cluster holds (almost) all the weight and is tight about its own mean.
-        # The spread of the whole set about the estimate would count the few particles that
-        # the motion noise scatters away from the mode, and flicker while the error is ~1 cm.
-        spread_m2 = max(float(w_n @ (sub[:, 0] ** 2 + sub[:, 1] ** 2) - mean_xy @ mean_xy), 0.0)
-        confidence = mass * (1.0 - self.lost.p_lost)
-        converged = bool(
-            confidence >= cfg.converged_mass and np.sqrt(spread_m2) < cfg.converged_std_m
-        )
-        n_modes = int(np.count_nonzero(masses >= _MODE_MASS))
-        return PoseEstimate(
-            pose, cov, len(self.particles), ess, converged, float(confidence), n_modes
+        return cloud_estimate(
+            self.particles, self.weights, self.cfg, self._size_xy, ess, self.lost.p_lost
         )
 
     def _injected(self, n: int, rng: np.random.Generator) -> np.ndarray:

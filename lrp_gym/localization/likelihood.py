@@ -36,76 +36,49 @@ range ``e_j`` closes at ``u_j = -v . (p_j - x) / e_j``: the robot's heading ente
 velocity ``v``, so moving frames weigh the heading hypotheses that the distances alone cannot.
 
 The result is invariant to the order of the measured distances (they are sorted first).
+The per-term array code is in :mod:`~lrp_gym.localization.likelihood_terms`; the map's
+predicted returns are in :mod:`~lrp_gym.localization.map_returns`.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from lrp_gym.localization._map_kernel import map_return_density
-from lrp_gym.localization.ghosts import GhostModel
+from lrp_gym.localization.likelihood_terms import log_likelihood_terms
+from lrp_gym.localization.map_returns import MapReturns
+from lrp_gym.localization.sorting import sort_rows_inplace, sort_rows_paired_inplace
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.room import Room
-from lrp_gym.world.structure import (
-    N_STRUCTURE_RETURNS,
-    structure_ranges_m,
-    structure_velocities_mps,
-)
 
 if TYPE_CHECKING:
     from lrp_gym.config import LocalizationConfig
     from lrp_gym.world.world import World
 
-_LOG_SQRT_2PI = 0.5 * np.log(2.0 * np.pi)
 
+@dataclass(frozen=True)
+class Segment:
+    """The measured distances of one reflector type, sorted ascending.
 
-_NETWORKS = {
-    2: [(0, 1)],
-    3: [(0, 1), (1, 2), (0, 1)],
-    4: [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)],
-}
-
-
-def sort_rows_inplace(values: np.ndarray) -> np.ndarray:
-    """Sort a (m, N) array along axis 0 (each column ascending), in place; returns it.
-
-    For ``m <= 4`` a sorting network of ``np.minimum``/``np.maximum`` on contiguous rows is
-    several times faster than ``np.sort(axis=0)``; beyond that ``np.sort``.
+    Attributes
+    ----------
+    type_index : int
+        The type's index in the layout.
+    z : ndarray (n,)
+        Distances.
+    s2 : ndarray (n,)
+        Their variances: the model's measurement variance plus the tracker's.
+    v : ndarray (n,) or None
+        Their radial velocities when the Doppler term applies, else None.
     """
-    m = values.shape[0]
-    if m <= 1:
-        return values
-    if m > 4:
-        values.sort(axis=0)
-        return values
-    for i, j in _NETWORKS[m]:
-        lo = np.minimum(values[i], values[j])
-        np.maximum(values[i], values[j], out=values[j])
-        values[i] = lo
-    return values
 
-
-def sort_rows_paired_inplace(values: np.ndarray, companion: np.ndarray) -> None:
-    """Sort ``values`` (m, N) along axis 0 in place and permute ``companion`` alongside."""
-    m = values.shape[0]
-    if m <= 1:
-        return
-    if m > 4:
-        order = np.argsort(values, axis=0)
-        values[:] = np.take_along_axis(values, order, axis=0)
-        companion[:] = np.take_along_axis(companion, order, axis=0)
-        return
-    for i, j in _NETWORKS[m]:
-        swap = values[i] > values[j]
-        lo = np.minimum(values[i], values[j])
-        np.maximum(values[i], values[j], out=values[j])
-        values[i] = lo
-        ci = np.where(swap, companion[j], companion[i])
-        np.copyto(companion[j], companion[i], where=swap)
-        companion[i] = ci
+    type_index: int
+    z: np.ndarray
+    s2: np.ndarray
+    v: np.ndarray | None
 
 
 class FingerprintModel:
@@ -142,8 +115,8 @@ class FingerprintModel:
         Probability that a measured distance is a reflector seen via a wall or the ceiling
         (:mod:`lrp_gym.localization.ghosts`); needs ``room``.
     use_numba : bool
-        Evaluate the room-structure and ghost terms with the compiled kernel of
-        :mod:`lrp_gym.localization._map_kernel` when numba is installed.
+        Evaluate the map-return density with the numba kernel of
+        :mod:`lrp_gym.localization._map_kernel` when numba is installed (else numpy).
     """
 
     def __init__(
@@ -171,17 +144,12 @@ class FingerprintModel:
         self.mount_height_m = float(mount_height_m)
         self.structure_probability = float(structure_probability) if room is not None else 0.0
         self.ghost_probability = float(ghost_probability) if room is not None else 0.0
-        if self.structure_probability + self.ghost_probability > 1.0:
-            raise ValueError(
-                "structure_probability + ghost_probability must be <= 1, got "
-                f"{self.structure_probability} + {self.ghost_probability}"
+        self.map_returns: MapReturns | None = None
+        if room is not None and self.structure_probability + self.ghost_probability > 0.0:
+            self.map_returns = MapReturns(
+                room, layout, mount_height_m, self.structure_probability, self.ghost_probability
             )
-        self.ghosts = (
-            GhostModel(room, layout, mount_height_m)
-            if room is not None and self.ghost_probability > 0.0
-            else None
-        )
-        self._extra_weights = self._map_return_weights()
+        self.ghosts = None if self.map_returns is None else self.map_returns.ghosts
         self.type_names = layout.type_names
         self._xy = []
         self._dz2 = []
@@ -212,6 +180,26 @@ class FingerprintModel:
             detection_probability=cfg.detection_probability,
             ghost_probability=cfg.ghost_probability,
         )
+
+    @property
+    def clean_probability(self) -> float:
+        """Probability that a measured distance is a reflector's (neither clutter nor a map
+        return): ``(1 - c)(1 - s - g)``."""
+        map_p = 0.0 if self.map_returns is None else self.map_returns.probability
+        return (1.0 - self.clutter_probability) * (1.0 - map_p)
+
+    def clutter_density_for(self, doppler: bool) -> float:
+        """Density of a clutter return: uniform in range, and in velocity with Doppler."""
+        return self.clutter_density * (self.velocity_density if doppler else 1.0)
+
+    def doppler_coefficients(self) -> tuple[float, float, float]:
+        """(a, b, c) of the Doppler density ``a exp(c dv^2) + b``: the Gaussian of the measured
+        radial velocity about the predicted one, plus the uniform outlier density."""
+        s = self.doppler_std_mps
+        q = self.doppler_outlier_probability
+        if s <= 0.0:
+            return 1.0, 0.0, 0.0
+        return (1.0 - q) / (np.sqrt(2.0 * np.pi) * s), q * self.velocity_density, -0.5 / s**2
 
     def expected(self, xy: np.ndarray, dtype=np.float64) -> list[np.ndarray]:
         """Sorted expected distances per type for positions (N, 2): list of (m_t, N) arrays.
@@ -255,69 +243,38 @@ class FingerprintModel:
             rates.append(rate)
         return ranges, rates
 
-    def _doppler_coefficients(self) -> tuple[float, float, float]:
-        """(a, b, c) of the Doppler density ``a exp(c dv^2) + b`` (see :meth:`_doppler_density`)."""
-        s = self.doppler_std_mps
-        q = self.doppler_outlier_probability
-        if s <= 0.0:
-            return 1.0, 0.0, 0.0
-        return (1.0 - q) / (np.sqrt(2.0 * np.pi) * s), q * self.velocity_density, -0.5 / s**2
-
-    def _doppler_density(self, v: np.ndarray, expected_v: np.ndarray, dtype) -> np.ndarray:
-        """Density of measured velocities ``v`` (n,) given expected ones (k, N): (n, k, N)."""
-        s = self.doppler_std_mps
-        q = self.doppler_outlier_probability
-        dv = expected_v[None, :, :] - v.astype(dtype)[:, None, None]
-        dv *= dv
-        dv *= dtype(-0.5 / s**2)
-        np.exp(dv, out=dv)
-        dv *= dtype((1.0 - q) / (np.sqrt(2.0 * np.pi) * s))
-        dv += dtype(q * self.velocity_density)
-        return dv
-
-    def _map_return_weights(self) -> np.ndarray | None:
-        """Mixture weight (K,) of each return of :meth:`_map_returns`; None without any."""
-        parts = []
-        if self.structure_probability > 0.0:
-            parts.append(
-                np.full(N_STRUCTURE_RETURNS, self.structure_probability / N_STRUCTURE_RETURNS)
-            )
-        if self.ghosts is not None:
-            parts.append(np.full(self.ghosts.count, self.ghost_probability / self.ghosts.count))
-        return np.concatenate(parts) if parts else None
-
-    def _map_returns(
-        self, xy: np.ndarray, velocity_xy: np.ndarray | None, dtype
-    ) -> tuple[np.ndarray, np.ndarray | None]:
-        """Ranges (K, N) of the non-reflector returns that the map predicts (room structure,
-        then reflector ghosts) and their radial velocities (K, N) given ``velocity_xy``."""
-        ranges, rates = [], []
-        room = self.room  # not None when structure_probability > 0 (see __init__)
-        if room is not None and self.structure_probability > 0.0:
-            ranges.append(structure_ranges_m(room, self.mount_height_m, xy).astype(dtype))
-            if velocity_xy is not None:
-                rates.append(
-                    structure_velocities_mps(room, self.mount_height_m, xy, velocity_xy).astype(
-                        dtype
-                    )
-                )
-        if self.ghosts is not None:
-            g, gv = self.ghosts.ranges(xy, velocity_xy, dtype)
-            ranges.append(g)
-            if gv is not None:
-                rates.append(gv)
-        r = np.concatenate(ranges) if len(ranges) > 1 else ranges[0]
-        if velocity_xy is None:
-            return r, None
-        return r, (np.concatenate(rates) if len(rates) > 1 else rates[0])
-
     def map_return_ranges(self, xy: np.ndarray, dtype=np.float32) -> np.ndarray | None:
         """Ranges (K, N) of the map-predicted non-reflector returns at positions (N, 2), to
         pass as ``map_ranges`` to :meth:`log_likelihood` for positions that do not move (a
         fixed grid); None when the model predicts none."""
-        if self._extra_weights is None:
+        if self.map_returns is None:
             return None
-        return self._map_returns(xy, None, dtype)[0]
+        return self.map_returns.ranges(xy, None, dtype)[0]
+
+    def segments(self, fingerprint: Fingerprint, doppler: bool) -> list[Segment]:
+        """The fingerprint's distances per type that the likelihood weighs, sorted: types the
+        layout lacks (their distances carry the same clutter factor for every position),
+        empty types and types without reflectors are left out."""
+        out = []
+        velocities = fingerprint.velocities_mps
+        for k, (name, z, var) in enumerate(
+            zip(
+                fingerprint.type_names,
+                fingerprint.distances_m,
+                fingerprint.variances_m2,
+                strict=True,
+            )
+        ):
+            if len(z) == 0 or name not in self.type_names:
+                continue
+            t = self.type_names.index(name)
+            if self.counts[t] == 0:
+                continue
+            order = np.argsort(z)
+            s2 = self.measurement_var_m2 + np.asarray(var, dtype=float)[order]
+            v = np.asarray(velocities[k], dtype=float)[order] if doppler and velocities else None
+            out.append(Segment(t, np.asarray(z, dtype=float)[order], s2, v))
+        return out
 
     def log_likelihood(
         self,
@@ -332,119 +289,22 @@ class FingerprintModel:
         Types are matched by name; a type the layout does not have is ignored (its distances
         carry the same clutter factor for every particle). ``velocity_xy`` (N, 2), the velocity
         of each position's robot over the floor, adds the Doppler term when the model has a
-        ``doppler_std_mps`` and the fingerprint carries velocities. The per-particle arithmetic runs in
-        ``dtype`` (float32 by default: SIMD ``exp`` is several times faster, and distances in a
-        room keep sub-micrometre precision); the per-type sums are float64. ``map_ranges``,
-        :meth:`map_return_ranges` of ``xy``, saves recomputing them where the Doppler term does
-        not apply (else they are computed with their velocities).
+        ``doppler_std_mps`` and the fingerprint carries velocities. The per-position
+        arithmetic runs in ``dtype`` (float32 by default: SIMD ``exp`` is several times
+        faster, and distances in a room keep sub-micrometre precision); the sums are float64.
+        ``map_ranges``, :meth:`map_return_ranges` of ``xy``, saves recomputing them where the
+        Doppler term does not apply (else they are computed with their velocities).
         """
-        n_pos = xy.shape[0]
-        out = np.zeros(n_pos)
-        expected = None
-        extra = extra_v = None
-        c = self.clutter_probability
-        s_prob = self.structure_probability
-        gh_prob = self.ghost_probability
-        extra_w = self._extra_weights
-        measured_v = fingerprint.velocities_mps
-        # The robot's velocity when the Doppler term applies, else None.
-        doppler_xy = velocity_xy if self.doppler_std_mps > 0.0 and measured_v is not None else None
-        doppler = doppler_xy is not None
-        if map_ranges is not None and not doppler:
-            extra = map_ranges.astype(dtype, copy=False)
-        velocities: tuple[np.ndarray | None, ...] = (
-            measured_v
-            if doppler and measured_v is not None
-            else (None,) * len(fingerprint.type_names)
+        doppler = (
+            velocity_xy is not None
+            and self.doppler_std_mps > 0.0
+            and fingerprint.velocities_mps is not None
         )
-        clutter_density = self.clutter_density * (self.velocity_density if doppler else 1.0)
-        for name, z, var, vel in zip(
-            fingerprint.type_names,
-            fingerprint.distances_m,
-            fingerprint.variances_m2,
-            velocities,
-            strict=True,
-        ):
-            if len(z) == 0 or name not in self.type_names:
-                continue
-            t = self.type_names.index(name)
-            m = self.counts[t]
-            if m == 0:
-                continue
-            if expected is None:
-                if doppler_xy is not None:
-                    expected, expected_v = self.expected_with_velocity(xy, doppler_xy, dtype)
-                else:
-                    expected = self.expected(xy, dtype)
-            e = expected[t]  # (m, N), sorted along axis 0
-            order = np.argsort(z)
-            z = np.asarray(z, dtype=float)[order]
-            dens_v = None
-            if doppler:
-                v_sorted = np.asarray(vel)[order]
-                dens_v = self._doppler_density(v_sorted, expected_v[t], dtype)
-            s2 = self.measurement_var_m2 + np.asarray(var, dtype=float)[order]
-            half_inv = (-0.5 / s2).astype(dtype)[:, None]
-            log_norm = -0.5 * np.log(2.0 * np.pi * s2)
-            n = len(z)
-            ln_scale = log_norm.astype(dtype)[:, None]
-            # r[i, j] = half_inv_i (e_j - z_i)^2 for every measured i and expected j.
-            r = e[None, :, :] - z.astype(dtype)[:, None, None]  # (n, m, N)
-            r *= r
-            r *= half_inv[:, :, None]
-            log_sorted = None
-            if n == m:  # diagonal = sorted-to-sorted assignment (e and z both ascending)
-                diag = r[np.arange(n), np.arange(n)]
-                diag += ln_scale
-                if dens_v is not None:
-                    diag += np.log(dens_v[np.arange(n), np.arange(n)])
-                log_sorted = diag.sum(axis=0, dtype=np.float64)
-            if c == 0.0:
-                if log_sorted is None:  # no clutter floor: the mixture in the log domain
-                    mix = np.logaddexp.reduce(r, axis=1) + ln_scale - dtype(np.log(m))
-                    log_sorted = mix.sum(axis=0, dtype=np.float64)
-                out += log_sorted
-                continue
-            np.exp(r, out=r)
-            if self.detection_probability > 0.0:
-                # Negative information: a reflector that no measured distance matches was
-                # missed, which a pose that predicts it visible explains with 1 - P_D only.
-                p_d = dtype(self.detection_probability)
-                matched = r.max(axis=0)  # (m, N): kernel of each reflector's best match
-                matched *= p_d
-                matched += dtype(1.0) - p_d
-                out += np.log(matched).sum(axis=0, dtype=np.float64)
-            if dens_v is not None:
-                r *= dens_v
-            g = r.mean(axis=1)  # (n, N)
-            if extra_w is not None:
-                if extra is None:
-                    extra, extra_v = self._map_returns(xy, doppler_xy, dtype)
-                g *= dtype(1.0 - s_prob - gh_prob)
-                g += map_return_density(
-                    z,
-                    half_inv[:, 0],
-                    extra,
-                    extra_w,
-                    v_sorted if doppler else None,
-                    extra_v,
-                    self._doppler_coefficients(),
-                    self.use_numba,
-                )
-            g *= ((1.0 - c) * np.exp(log_norm)).astype(dtype)[:, None]
-            g += dtype(c * clutter_density)
-            # Every factor is >= the clutter floor: chunks of 8 cannot underflow in float32.
-            log_mix = np.zeros(n_pos)
-            for k in range(0, n, 8):
-                log_mix += np.log(np.prod(g[k : k + 8], axis=0))
-            if log_sorted is None:
-                out += log_mix
-                continue
-            # All n distances are reflectors with probability (1 - c)^n: sorted assignment;
-            # otherwise at least one is clutter (and one reflector missed): the mixture.
-            p_clean = ((1.0 - c) * (1.0 - s_prob - gh_prob)) ** n
-            out += np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
-        return out
+        vel = velocity_xy if doppler else None
+        segments = self.segments(fingerprint, doppler)
+        if not segments:
+            return np.zeros(xy.shape[0])
+        return log_likelihood_terms(self, xy, segments, vel, map_ranges, dtype)
 
     def distance_fits(
         self, xy: np.ndarray, weights: np.ndarray, fingerprint: Fingerprint
@@ -487,3 +347,14 @@ class FingerprintModel:
             fits = np.exp(r2, out=r2) @ (weights / total_w)
             out.append(-np.sort(-fits)[: self.counts[t]])
         return np.concatenate(out) if out else np.zeros(0)
+
+
+def frame_fit(fits: np.ndarray) -> float | None:
+    """One frame's measurement fit from :meth:`FingerprintModel.distance_fits`: their mean,
+    leaving out the worst of three or more (a missed reflector plus a clutter distance), at
+    least 1e-12; None without any distance."""
+    if len(fits) == 0:
+        return None
+    if len(fits) >= 3:
+        fits = np.delete(fits, np.argmin(fits))
+    return max(float(np.mean(fits)), 1e-12)

@@ -22,9 +22,6 @@ ALLOWED: dict[str, str] = {
     "lrp_gym/commands/robustness.py::robustness": "typer command: the signature is its option table (one Annotated parameter per flag) (being changed on another branch)",
     "lrp_gym/commands/train.py::train": "typer command: the signature is its option table (one Annotated parameter per flag) (53 signature lines, body ~30)",
     "lrp_gym/experiments/robustness.py::run_matrix": "being changed on another branch (robustness)",
-    "lrp_gym/localization/amcl.py": "TODO(issue 15): 402 lines; move the lost test out",
-    "lrp_gym/localization/likelihood.py": "TODO(issue 15): split the map-return terms from the reflector term",
-    "lrp_gym/localization/likelihood.py::FingerprintModel.log_likelihood": "hot loop over types kept in one frame for speed; TODO(issue 15) split per term",
     "lrp_gym/tracking/tracker.py::LrpTracker.update": "numpydoc of the tracker's main entry is 40 lines; the body is ~35",
 }
 

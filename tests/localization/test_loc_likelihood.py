@@ -1,7 +1,8 @@
 import numpy as np
 import pytest
 
-from lrp_gym.localization.likelihood import FingerprintModel, sort_rows_inplace
+from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.localization.sorting import sort_rows_inplace
 from lrp_gym.tracking.fingerprint import Fingerprint
 
 

@@ -1,0 +1,165 @@
+"""The terms of the fingerprint log-likelihood of :mod:`lrp_gym.localization.likelihood`:
+whole (distances x reflectors x positions) arrays per type.
+
+The per-position arithmetic runs in ``dtype`` (float32: SIMD
+``exp`` is several times faster, and distances in a room keep sub-micrometre precision); the
+sums over distances are float64.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from lrp_gym.localization._map_kernel import map_return_density
+
+if TYPE_CHECKING:
+    from lrp_gym.localization.likelihood import FingerprintModel, Segment
+
+
+def doppler_density(
+    v: np.ndarray, expected_v: np.ndarray, coefficients: tuple[float, float, float], dtype
+) -> np.ndarray:
+    """Density ``a exp(c dv^2) + b`` (n, k, N) of measured velocities ``v`` (n,) given
+    expected ones (k, N), with ``coefficients = (a, b, c)``."""
+    a, b, c = coefficients
+    dv = expected_v[None, :, :] - v.astype(dtype)[:, None, None]
+    dv *= dv
+    dv *= dtype(c)
+    np.exp(dv, out=dv)
+    dv *= dtype(a)
+    dv += dtype(b)
+    return dv
+
+
+class _Frame:
+    """What the types of one frame share: positions, the expected ranges (computed on first
+    use) and the map's predicted returns (computed on first use, or given)."""
+
+    def __init__(self, model, xy, velocity_xy, map_ranges, dtype) -> None:
+        self.model = model
+        self.xy = xy
+        self.velocity_xy = velocity_xy  # None without the Doppler term
+        self.dtype = dtype
+        self.expected: list[np.ndarray] | None = None
+        self.expected_v: list[np.ndarray] | None = None
+        self.extra = self.extra_v = None
+        if map_ranges is not None and velocity_xy is None:
+            self.extra = map_ranges.astype(dtype, copy=False)
+
+    def expected_of(self, t: int) -> tuple[np.ndarray, np.ndarray | None]:
+        if self.expected is None:
+            if self.velocity_xy is not None:
+                self.expected, self.expected_v = self.model.expected_with_velocity(
+                    self.xy, self.velocity_xy, self.dtype
+                )
+            else:
+                self.expected = self.model.expected(self.xy, self.dtype)
+        return self.expected[t], None if self.expected_v is None else self.expected_v[t]
+
+    def map_returns(self) -> tuple[np.ndarray, np.ndarray | None]:
+        if self.extra is None:
+            self.extra, self.extra_v = self.model.map_returns.ranges(
+                self.xy, self.velocity_xy, self.dtype
+            )
+        return self.extra, self.extra_v
+
+
+def log_likelihood_terms(
+    model: FingerprintModel,
+    xy: np.ndarray,
+    segments: list[Segment],
+    velocity_xy: np.ndarray | None,
+    map_ranges: np.ndarray | None,
+    dtype,
+) -> np.ndarray:
+    """Log-likelihood (N,) of the ``segments`` of a fingerprint at positions ``xy`` (N, 2);
+    ``velocity_xy`` is None unless the Doppler term applies."""
+    frame = _Frame(model, xy, velocity_xy, map_ranges, dtype)
+    out = np.zeros(xy.shape[0])
+    for seg in segments:
+        out += _segment_term(frame, seg)
+    return out
+
+
+def _segment_term(frame: _Frame, seg: Segment) -> np.ndarray:
+    """Log-likelihood (N,) of the sorted distances of one type."""
+    model, dtype = frame.model, frame.dtype
+    c = model.clutter_probability
+    e, e_v = frame.expected_of(seg.type_index)  # (m, N), sorted along axis 0
+    m = e.shape[0]
+    n = len(seg.z)
+    dens_v = None
+    if e_v is not None and seg.v is not None:
+        dens_v = doppler_density(seg.v, e_v, model.doppler_coefficients(), dtype)
+    half_inv = (-0.5 / seg.s2).astype(dtype)[:, None]
+    log_norm = -0.5 * np.log(2.0 * np.pi * seg.s2)
+    ln_scale = log_norm.astype(dtype)[:, None]
+    # r[i, j] = half_inv_i (e_j - z_i)^2 for every measured i and expected j.
+    r = e[None, :, :] - seg.z.astype(dtype)[:, None, None]  # (n, m, N)
+    r *= r
+    r *= half_inv[:, :, None]
+    log_sorted = None
+    if n == m:  # diagonal = sorted-to-sorted assignment (e and z both ascending)
+        diag = r[np.arange(n), np.arange(n)]
+        diag += ln_scale
+        if dens_v is not None:
+            diag += np.log(dens_v[np.arange(n), np.arange(n)])
+        log_sorted = diag.sum(axis=0, dtype=np.float64)
+    if c == 0.0:
+        if log_sorted is not None:
+            return log_sorted
+        # No clutter floor: the mixture in the log domain.
+        mix = np.logaddexp.reduce(r, axis=1) + ln_scale - dtype(np.log(m))
+        return mix.sum(axis=0, dtype=np.float64)
+    np.exp(r, out=r)
+    out = _missed_term(r, model.detection_probability, dtype)
+    if dens_v is not None:
+        r *= dens_v
+    g = r.mean(axis=1)  # (n, N)
+    if model.map_returns is not None:
+        extra, extra_v = frame.map_returns()
+        g *= dtype(1.0 - model.map_returns.probability)
+        g += map_return_density(
+            seg.z,
+            half_inv[:, 0],
+            extra,
+            model.map_returns.weights,
+            seg.v,
+            extra_v,
+            model.doppler_coefficients(),
+            model.use_numba,
+        )
+    log_mix = _log_mixture(g, log_norm, c, model.clutter_density_for(dens_v is not None), dtype)
+    if log_sorted is None:
+        return out + log_mix
+    # All n distances are reflectors with probability (1 - c)^n: sorted assignment;
+    # otherwise at least one is clutter (and one reflector missed): the mixture.
+    p_clean = model.clean_probability**n
+    return out + np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
+
+
+def _missed_term(kernel: np.ndarray, detection_probability: float, dtype) -> np.ndarray | float:
+    """Negative information (N,): a reflector that no measured distance matches was missed,
+    which a pose that predicts it visible explains with ``1 - P_D`` only. ``kernel`` (n, m, N)
+    holds ``exp(-r^2 / (2 s^2))`` of each distance and reflector; 0 without the term."""
+    if detection_probability <= 0.0:
+        return 0.0
+    p_d = dtype(detection_probability)
+    matched = kernel.max(axis=0)  # (m, N): kernel of each reflector's best match
+    matched *= p_d
+    matched += dtype(1.0) - p_d
+    return np.log(matched).sum(axis=0, dtype=np.float64)
+
+
+def _log_mixture(g: np.ndarray, log_norm: np.ndarray, c: float, clutter_density: float, dtype):
+    """``sum_i log((1 - c) N_i g_i + c / R)`` (N,) over the distances' mixture densities
+    ``g`` (n, N) (normalisation ``N_i = exp(log_norm_i)``)."""
+    g *= ((1.0 - c) * np.exp(log_norm)).astype(dtype)[:, None]
+    g += dtype(c * clutter_density)
+    # Every factor is >= the clutter floor: chunks of 8 cannot underflow in float32.
+    log_mix = np.zeros(g.shape[1])
+    for k in range(0, g.shape[0], 8):
+        log_mix += np.log(np.prod(g[k : k + 8], axis=0))
+    return log_mix

@@ -1,0 +1,96 @@
+"""The non-reflector returns that the map predicts for a floor position: the room's structure
+(ceiling, wall-ceiling edges, walls, corners; :mod:`lrp_gym.world.structure`) and the
+reflectors' ghosts via the faces (:mod:`lrp_gym.localization.ghosts`), with their mixture
+weights in the fingerprint likelihood.
+
+A reflector-like return of the room counts as evidence for the positions that predict it
+rather than as clutter that any position may borrow: each measured distance's reflector term
+``mean_j N(z; e_j)`` is mixed with ``sum_k w_k N(z; g_k)`` over these predicted ranges ``g_k``,
+the weights summing to the structure plus ghost probability.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from lrp_gym.localization.ghosts import GhostModel
+from lrp_gym.world.reflectors import ReflectorLayout
+from lrp_gym.world.room import Room
+from lrp_gym.world.structure import (
+    N_STRUCTURE_RETURNS,
+    structure_ranges_m,
+    structure_velocities_mps,
+)
+
+
+class MapReturns:
+    """Predicted structure and ghost returns of a room, and their mixture weights.
+
+    Parameters
+    ----------
+    room : Room
+        The room whose structure and faces produce the returns.
+    layout : ReflectorLayout
+        The reflectors whose ghosts are predicted.
+    mount_height_m : float
+        Radar height above the floor.
+    structure_probability, ghost_probability : float
+        Probability that a measured distance is a structure return, or a reflector's ghost;
+        their sum is at most 1. A zero leaves that kind of return out.
+    """
+
+    def __init__(
+        self,
+        room: Room,
+        layout: ReflectorLayout,
+        mount_height_m: float,
+        structure_probability: float,
+        ghost_probability: float,
+    ) -> None:
+        if structure_probability + ghost_probability > 1.0:
+            raise ValueError(
+                "structure_probability + ghost_probability must be <= 1, got "
+                f"{structure_probability} + {ghost_probability}"
+            )
+        self.room = room
+        self.mount_height_m = float(mount_height_m)
+        self.structure_probability = float(structure_probability)
+        self.ghost_probability = float(ghost_probability)
+        self.ghosts = (
+            GhostModel(room, layout, mount_height_m) if self.ghost_probability > 0.0 else None
+        )
+        parts = []
+        if self.structure_probability > 0.0:
+            w = self.structure_probability / N_STRUCTURE_RETURNS
+            parts.append(np.full(N_STRUCTURE_RETURNS, w))
+        if self.ghosts is not None:
+            parts.append(np.full(self.ghosts.count, self.ghost_probability / self.ghosts.count))
+        #: Mixture weight (K,) of each row of :meth:`ranges`; None when there is none.
+        self.weights: np.ndarray | None = np.concatenate(parts) if parts else None
+
+    @property
+    def probability(self) -> float:
+        """Total probability of the map's returns (the sum of :attr:`weights`)."""
+        return self.structure_probability + self.ghost_probability
+
+    def ranges(
+        self, xy: np.ndarray, velocity_xy: np.ndarray | None, dtype=np.float32
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Ranges (K, N) of the predicted returns at positions (N, 2) (room structure, then
+        reflector ghosts) and their radial velocities (K, N) given ``velocity_xy`` (N, 2), else
+        None. Needs :attr:`weights` (at least one kind of return)."""
+        ranges, rates = [], []
+        if self.structure_probability > 0.0:
+            h = self.mount_height_m
+            ranges.append(structure_ranges_m(self.room, h, xy).astype(dtype))
+            if velocity_xy is not None:
+                rates.append(structure_velocities_mps(self.room, h, xy, velocity_xy).astype(dtype))
+        if self.ghosts is not None:
+            g, gv = self.ghosts.ranges(xy, velocity_xy, dtype)
+            ranges.append(g)
+            if gv is not None:
+                rates.append(gv)
+        r = np.concatenate(ranges) if len(ranges) > 1 else ranges[0]
+        if velocity_xy is None:
+            return r, None
+        return r, (np.concatenate(rates) if len(rates) > 1 else rates[0])
