@@ -326,8 +326,8 @@ def kidnap_frame(perturbations: PerturbationSet | None) -> int | None:
 
 
 def perturbed_reflectors(perturbations: PerturbationSet | None) -> tuple[int, ...]:
-    """Reflectors this episode's perturbations moved (displaced reflector) or hid until the
-    episode's end (static shadowing longer than any episode): the ones a monitor should name."""
+    """Reflectors this episode's perturbations moved (displaced reflector) or hid
+    (shadowing): the ones the reflector monitor may rightly name."""
     if perturbations is None:
         return ()
     out: set[int] = set()
@@ -335,7 +335,7 @@ def perturbed_reflectors(perturbations: PerturbationSet | None) -> tuple[int, ..
     if isinstance(moved, DisplacedReflector):
         out |= {int(j) for j in moved.moved}
     hidden = perturbations.get("shadowing")
-    if isinstance(hidden, Shadowing) and hidden.cfg.mode == "static" and hidden.frames >= 1000:
+    if isinstance(hidden, Shadowing):
         out |= {int(j) for j in hidden.targets}
     return tuple(sorted(out))
 
