@@ -2,7 +2,7 @@
 
 ``lrp-gym bench -c vector``: for each radar fidelity, the single env and the vector env with
 N robots, on the default task (sampled goals, autoreset included), driven with the same
-random action stream. Figures are per core (the bench pins itself to one); the ratio
+random action stream, timed after ``WARMUP_STEPS`` steps. Figures are per core (the bench pins itself to one); the ratio
 ``speedup_vs_single`` is what the batching buys, measured within one run.
 """
 
@@ -18,6 +18,12 @@ from lrp_gym.config import ScenarioConfig
 from lrp_gym.envs.vector_env import LRPRadarNavVectorEnv
 
 BATCH_SIZES = (1, 8, 64, 256)
+#: Steps run before timing: the first frames of an episode (global localisation over 10 000
+#: particles) cost several times a converged frame, and a batch timed over two steps would
+#: measure only them.
+WARMUP_STEPS = 10
+#: Timed steps at least, whatever ``seconds`` says.
+MIN_STEPS = 5
 FIDELITIES = ("detections", "signal")
 _STAGES = ("radar", "tracking_localization", "lut")
 
@@ -31,8 +37,10 @@ def single_env_steps_per_s(cfg: ScenarioConfig, seconds: float) -> float:
     env = gym.make("LRPRadarNav-v0", scenario=cfg).unwrapped
     rng = np.random.default_rng(0)
     env.reset(seed=0)
+    for _ in range(WARMUP_STEPS):
+        env.step(_actions(rng, 1)[0])
     steps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds or steps < 2:
+    while time.perf_counter() - t0 < seconds or steps < MIN_STEPS:
         _, _, terminated, truncated, _ = env.step(_actions(rng, 1)[0])
         steps += 1
         if terminated or truncated:
@@ -45,9 +53,11 @@ def vector_env_figures(cfg: ScenarioConfig, num_envs: int, seconds: float) -> di
     venv = LRPRadarNavVectorEnv(num_envs, scenario=cfg)
     rng = np.random.default_rng(0)
     venv.reset(seed=0)
+    for _ in range(WARMUP_STEPS):
+        venv.step(_actions(rng, num_envs))
     stage_s = dict.fromkeys(_STAGES, 0.0)
     steps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds or steps < 2:
+    while time.perf_counter() - t0 < seconds or steps < MIN_STEPS:
         venv.step(_actions(rng, num_envs))
         steps += 1
         for frame in venv.core.frames:
