@@ -252,12 +252,7 @@ def run_matrix(
         ``{"agent", "env_id", "task", "episodes", "seed", "cells": [...]}``.
     """
     _check(perturbations, severities, episodes)
-    if task not in ("path", "goal", None) or (task is None and scenario is None):
-        raise ValueError(f"task: must be 'path' or 'goal', got {task!r}")
-    if scenario is None:
-        scenario = "ipin2023" if task == "path" else None
-    elif task is not None:
-        overrides = deep_merge(overrides or {}, {"task": {"mode": task}})
+    scenario, overrides = _scenario_and_task(task, scenario, overrides)
     cells_spec = [(BASELINE, 0.0)] + [(p, s) for p in perturbations for s in severities]
     policy = None
     cells = []
@@ -274,15 +269,22 @@ def run_matrix(
             )
         finally:
             env.close()
-    return {
-        "agent": agent,
-        "env_id": env_id,
-        "scenario": scenario,
-        "task": task,
-        "episodes": episodes,
-        "seed": seed,
-        "cells": cells,
-    }
+    head = {"agent": agent, "env_id": env_id, "scenario": scenario, "task": task}
+    return {**head, "episodes": episodes, "seed": seed, "cells": cells}
+
+
+def _scenario_and_task(
+    task: str | None, scenario: str | None, overrides: dict[str, Any] | None
+) -> tuple[str | None, dict[str, Any] | None]:
+    """The matrix's scenario (``ipin2023`` for the path task, sampled goals in the default
+    room for ``goal``) and the overrides with a given scenario's ``task.mode`` set."""
+    if task not in ("path", "goal", None) or (task is None and scenario is None):
+        raise ValueError(f"task: must be 'path' or 'goal', got {task!r}")
+    if scenario is None:
+        return ("ipin2023" if task == "path" else None), overrides
+    if task is not None:
+        overrides = deep_merge(overrides or {}, {"task": {"mode": task}})
+    return scenario, overrides
 
 
 def plot_matrix(result: dict[str, Any]):
