@@ -6,9 +6,14 @@ should see a return of its type at the predicted distance and does not. The moni
 frames where the localiser vouches for its estimate (converged), whether each reflector that
 should be visible (in range, its pattern facing the radar within ``min_gain``, no obstacle on
 the line of sight) has a detection of its type within ``gate_sigmas`` standard deviations of
-the predicted distance (the radar's range noise and a converged estimate's error: about 0.1 m). The miss share (a running mean over its first ``window_frames``
+the predicted distance (the radar's range noise and a converged estimate's error: about 0.1 m;
+distances of any type count, because a weak return's RCS estimate scatters across the types'
+windows). The miss share (a running mean over its first ``window_frames``
 visible frames, then exponentially weighted over about that many) above ``suspect_share``,
-after at least ``min_visible_frames`` visible frames, names the reflector a suspect; below ``clear_share``
+after at least ``min_visible_frames`` visible frames, names the reflector a suspect, and so
+does a mean residual (nearest return minus prediction, over the frames it is within twice the
+gate) of ``bias_m`` or more: a reflector moved by about one gate width still answers inside
+the gate in many frames, but always on the same side; below ``clear_share``
 clears it (hysteresis). The null case is the radar's own miss rate (about 5 % per frame for a
 visible trihedral in the paper room). The gate must be tight: a frame has about ten
 reflector-like returns (ghosts via walls and ceiling, room corners) between 2 and 6 m, so a
@@ -45,20 +50,28 @@ class ReflectorMonitor:
     cfg : ReflectorMonitorConfig
     max_range_m : float
         Farthest distance the radar reports a reflector at.
+    noise_rcs_dbsm : float, optional
+        The RCS at 1 m whose return equals the noise of one range-Doppler cell (from the
+        radar equation of the sensor); with it a reflector counts as visible only where its
+        return's margin over that, ``rcs_eff - 40 log10(r) - noise_rcs_dbsm``, reaches
+        ``cfg.min_margin_db``.
     """
 
     world: World
     cfg: ReflectorMonitorConfig
     max_range_m: float
+    noise_rcs_dbsm: float | None = None
 
     def __post_init__(self) -> None:
         m = len(self.world.layout)
         self.miss_share = np.zeros(m)
+        self.mean_residual_m = np.zeros(m)
         self.visible_frames = np.zeros(m, dtype=np.int64)
         self.suspect = np.zeros(m, dtype=bool)
 
     def reset(self) -> None:
         self.miss_share[:] = 0.0
+        self.mean_residual_m[:] = 0.0
         self.visible_frames[:] = 0
         self.suspect[:] = False
 
@@ -72,8 +85,12 @@ class ReflectorMonitor:
         layout, room = self.world.layout, self.world.room
         radar = self.world.radar_position(np.asarray(xy, dtype=float))
         dist = layout.distances_m(radar)
-        gain = layout.effective_rcs_m2(radar) / layout.rcs_m2
-        ok = (gain >= self.cfg.min_gain) & (dist <= self.max_range_m)
+        rcs_m2 = layout.effective_rcs_m2(radar)
+        ok = (rcs_m2 >= self.cfg.min_gain * layout.rcs_m2) & (dist <= self.max_range_m)
+        if self.noise_rcs_dbsm is not None and self.cfg.min_margin_db is not None:
+            # A weak return (small reflector, far) is missed often by the radar itself.
+            margin_db = 10.0 * np.log10(np.maximum(rcs_m2, 1e-30)) - 40.0 * np.log10(dist)
+            ok &= margin_db - self.noise_rcs_dbsm >= self.cfg.min_margin_db
         if room.obstacles:
             starts = np.broadcast_to(radar, layout.positions_m.shape)
             ok &= ~room.segments_blocked(starts, layout.positions_m)
@@ -101,24 +118,33 @@ class ReflectorMonitor:
         # (about 6 cm when converged, while the error is 1-2 cm) and would let a moved
         # reflector's distance find a stray return in most frames.
         gate_m = self.cfg.gate_sigmas * self.cfg.range_std_m
-        matched = np.zeros(len(layout), dtype=bool)
-        for t, name in enumerate(layout.type_names):
-            if name not in gated.type_names:
-                continue
-            z = gated.distances_m[gated.type_names.index(name)]
-            sel = layout.type_index == t
-            if len(z):
-                matched[sel] = np.min(np.abs(predicted[sel, None] - z[None, :]), axis=1) <= gate_m
-        missed = (~matched).astype(float)
+        residual = self._nearest_residuals(predicted, gated)
+        missed = (np.abs(residual) > gate_m).astype(float)
+        # The residual's average over the frames it is within twice the gate: a reflector
+        # moved by a few gate widths still answers near its predicted distance in many frames,
+        # but always on the same side.
+        near = seen & (np.abs(residual) <= 2.0 * gate_m)
         self.visible_frames[seen] += 1
         # A running mean until 1/k falls below 1/window (bias-corrected average), then EWMA.
-        alpha = np.maximum(1.0 / self.cfg.window_frames, 1.0 / self.visible_frames[seen])
-        self.miss_share[seen] += alpha * (missed[seen] - self.miss_share[seen])
+        alpha = 1.0 / np.clip(self.visible_frames, 1, self.cfg.window_frames)
+        self.miss_share[seen] += alpha[seen] * (missed[seen] - self.miss_share[seen])
+        self.mean_residual_m[near] += alpha[near] * (residual[near] - self.mean_residual_m[near])
         before = self.suspect.copy()
         ready = self.visible_frames >= self.cfg.min_visible_frames
-        self.suspect |= ready & (self.miss_share >= self.cfg.suspect_share)
-        self.suspect &= self.miss_share > self.cfg.clear_share
+        biased = np.abs(self.mean_residual_m) >= self.cfg.bias_m
+        self.suspect |= ready & ((self.miss_share >= self.cfg.suspect_share) | biased)
+        self.suspect &= (self.miss_share > self.cfg.clear_share) | biased
         return bool(np.any(before != self.suspect))
+
+    def _nearest_residuals(self, predicted: np.ndarray, gated: Fingerprint) -> np.ndarray:
+        """Per reflector, the nearest reflector-like measured distance minus the predicted
+        one (inf without any). Distances of every type count: a weak return's RCS estimate
+        scatters, and the tracker may give a small reflector's return to another type."""
+        z = np.concatenate([np.zeros(0), *gated.distances_m])
+        if len(z) == 0:
+            return np.full(len(predicted), np.inf)
+        diff = z[None, :] - predicted[:, None]
+        return diff[np.arange(len(predicted)), np.argmin(np.abs(diff), axis=1)]
 
 
 def model_without(

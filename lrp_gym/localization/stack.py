@@ -181,13 +181,15 @@ class LocalizationStack:
             else None
         )
         tracker = LrpTracker.from_world(world, cfg.tracking)
+        sensor = RadarSensor(world, cfg.radar)
         monitor = None
         if loc.reflector_monitor.enabled:
-            max_range_m = float(tracker.classifier.max_range_m)
-            monitor = ReflectorMonitor(world, loc.reflector_monitor, max_range_m)
+            noise = float(sensor.rcs_dbsm(np.array([sensor.noise_cell]), np.ones(1))[0])
+            max_r = float(tracker.classifier.max_range_m)
+            monitor = ReflectorMonitor(world, loc.reflector_monitor, max_r, noise)
         return cls(
             world,
-            RadarSensor(world, cfg.radar),
+            sensor,
             tracker,
             make_localizer(world, loc),
             lut,
@@ -205,7 +207,7 @@ class LocalizationStack:
         new = copy.copy(self)
         # A shallow copy: the radar's per-frame attributes (last paths) are then its own.
         new.surveyed_sensor = new.sensor = copy.copy(self.surveyed_sensor)
-        new.tracker = copy.copy(self.tracker)
+        new.tracker = copy.copy(self.tracker)  # its state is reset below
         new.tracker.reset()
         new.localizer = self.localizer.spawn()
         new.localizer.model = self._models[()]
@@ -347,8 +349,7 @@ class LocalizationStack:
         if self.lut is None:
             return None, estimate
         lut_est = self.lut.query(fingerprint)
-        # The table knows no heading: keep the localiser's.
-        pose = np.array([lut_est.pose[0], lut_est.pose[1], estimate.pose[2]])
+        pose = np.array([*lut_est.pose[:2], estimate.pose[2]])  # the table knows no heading
         conv = lut_est.converged
         return lut_est, PoseEstimate(pose, lut_est.covariance, 0, 0.0, conv, float(conv), 1)
 

@@ -67,6 +67,20 @@ def test_a_reflector_that_stops_answering_is_named_and_cleared_when_it_returns(w
     assert mon.suspects == () and not mon.visible_frames.any()
 
 
+def test_a_reflector_that_answers_always_a_little_too_far_is_named(world):
+    """Moved by about one gate: most of its returns still pass the gate, all on one side."""
+    mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+    xy = _visible_xy(world, mon, np.random.default_rng(2))
+    d = world.layout.distances_m(world.radar_position(xy))
+    shifted = d.copy()
+    shifted[1] += 0.06  # inside the 0.105 m gate: no miss, but a bias above bias_m
+    fp = Fingerprint.from_distances(world.layout.type_names, [shifted], 0.03)
+    for _ in range(CFG.min_visible_frames + 2):
+        mon.update(_estimate(xy), fp)
+    assert mon.miss_share.max() == 0.0
+    assert mon.suspects == (1,)
+
+
 def test_frames_without_a_converged_estimate_are_not_judged(world):
     mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
     xy = _visible_xy(world, mon, np.random.default_rng(1))
