@@ -166,7 +166,7 @@ class EpisodeRecorder:
 
     def result(self, perturbations: PerturbationSet | None = None) -> EpisodeResult:
         """The episode's result; ``perturbations``, the episode's, tell the frame of a
-        kidnapping and which reflectors were moved or hidden for good."""
+        kidnapping and which reflectors were moved or hidden."""
         txy = np.asarray(self.true_xy)
         return EpisodeResult(
             seed=self.seed,
