@@ -128,6 +128,13 @@ class LocalizationConfig(Strict):
         "mass), so that a minority mode survives until the evidence decides; 0: plain resampling",
     )
     lost_drift_nats: NonNegFloat = 4.0
+    lost_drift_per_distance_nats: NonNegFloat = Field(
+        default=0.4,
+        description="the lost test's drift per measured distance: a frame's drift is "
+        "max(lost_drift_nats, this x distances), because the best grid cell's chance fit "
+        "grows with the distances weighed (a right cloud read as lost in rooms with many "
+        "reflector-like returns)",
+    )
     lost_threshold_nats: PositiveFloat = 8.0
     lost_restart_nats: PositiveFloat = 20.0
     resample_ess_ratio: Fraction = 0.5

@@ -91,7 +91,7 @@ class Amcl:
             self.start_grid = MeasurementGrid(
                 self._size_xy, cfg.global_grid_m / 2.0, self._free, max_cells=160_000
             )
-        self.lost = LostTest(cfg.lost_drift_nats, cfg.lost_threshold_nats)
+        self.lost = self._new_lost_test()
         self._grid_loglik: np.ndarray | None = None
         self._pending_global = False
         self.particles = np.zeros((0, 3))
@@ -108,10 +108,14 @@ class Amcl:
         """Another robot's filter: the model, grids and binner shared, its own particles,
         weights and lost test (call :meth:`reset` before use)."""
         new = copy.copy(self)
-        new.lost = LostTest(self.cfg.lost_drift_nats, self.cfg.lost_threshold_nats)
+        new.lost = self._new_lost_test()
         new.particles, new.weights = np.zeros((0, 3)), np.zeros(0)
         new._predicted = new._grid_loglik = None
         return new
+
+    def _new_lost_test(self) -> LostTest:
+        c = self.cfg
+        return LostTest(c.lost_drift_nats, c.lost_threshold_nats, c.lost_drift_per_distance_nats)
 
     # ------------------------------------------------------------------ sampling
     def _free(self, xy: np.ndarray) -> np.ndarray:
@@ -275,7 +279,9 @@ class Amcl:
         stride = max(1, len(prior_weights) // _FIT_SAMPLE)
         sub = self.particles[::stride, :2]
         cloud_ll = self.model.log_likelihood(sub, fingerprint)
-        self.lost.update(float(np.max(grid_loglik)), cloud_ll, prior_weights[::stride])
+        self.lost.update(
+            float(np.max(grid_loglik)), cloud_ll, prior_weights[::stride], fingerprint.count
+        )
         if self.lost.statistic_nats >= self.cfg.lost_restart_nats:
             self._pending_global = True
 

@@ -105,6 +105,9 @@ class LostTest:
     drift_nats : float
         Evidence per frame that a correct cloud may show by chance (the best of many grid
         cells fits the noise a little better than the true position); subtracted per frame.
+    drift_per_distance_nats : float
+        The same per measured distance: the chance fit grows with the number of distances
+        weighed, so a frame's drift is ``max(drift_nats, drift_per_distance_nats * count)``.
     threshold_nats : float
         Statistic at which the cloud counts as lost (probability 1/2).
     statistic_nats : float
@@ -115,6 +118,7 @@ class LostTest:
 
     drift_nats: float = 4.0
     threshold_nats: float = 8.0
+    drift_per_distance_nats: float = 0.0
     statistic_nats: float = 0.0
     last_deficit_nats: float = 0.0
 
@@ -122,8 +126,15 @@ class LostTest:
         self.statistic_nats = 0.0
         self.last_deficit_nats = 0.0
 
-    def update(self, best_loglik: float, cloud_loglik: np.ndarray, weights: np.ndarray) -> None:
-        """Add one frame: ``cloud_loglik`` (K,) of particles with ``weights`` (K,)."""
+    def update(
+        self,
+        best_loglik: float,
+        cloud_loglik: np.ndarray,
+        weights: np.ndarray,
+        n_distances: int = 0,
+    ) -> None:
+        """Add one frame: ``cloud_loglik`` (K,) of particles with ``weights`` (K,), from a
+        fingerprint of ``n_distances`` measured distances."""
         total = float(np.sum(weights))
         if not total > 0.0:
             return
@@ -132,9 +143,8 @@ class LostTest:
         with np.errstate(divide="ignore"):  # all weight on -inf particles: -inf, no warning
             marginal = top + float(np.log(np.dot(weights / total, np.exp(cloud_loglik - top))))
         self.last_deficit_nats = best_loglik - marginal
-        self.statistic_nats = max(
-            0.0, self.statistic_nats + self.last_deficit_nats - self.drift_nats
-        )
+        drift = max(self.drift_nats, self.drift_per_distance_nats * n_distances)
+        self.statistic_nats = max(0.0, self.statistic_nats + self.last_deficit_nats - drift)
 
     @property
     def p_lost(self) -> float:

@@ -48,6 +48,17 @@ def test_lost_test_ignores_chance_deficits_and_fires_on_consistent_ones():
     assert test.statistic_nats == pytest.approx(3.0)
 
 
+def test_lost_test_drift_grows_with_the_distances_weighed():
+    """The best cell's chance fit grows with the distances: 30 of them earn a 9-nat drift."""
+    test = LostTest(drift_nats=3.0, threshold_nats=6.0, drift_per_distance_nats=0.3)
+    w = np.ones(4)
+    for _ in range(20):  # an 8-nat deficit with 30 distances is chance: no alarm
+        test.update(0.0, np.full(4, -8.0), w, n_distances=30)
+    assert test.statistic_nats == 0.0
+    test.update(0.0, np.full(4, -8.0), w, n_distances=5)  # with 5 the drift is 3 nats
+    assert test.statistic_nats == pytest.approx(5.0)
+
+
 def test_mode_preserving_resample_keeps_a_minority_mode_with_its_mass():
     rng = np.random.default_rng(1)
     n = 1000
