@@ -179,7 +179,9 @@ def _new_model(venv: Any, hp: dict, seed: int, verbose: int, run_dir: Path):
 def _eval_venv(hp: dict, env_id: str, seed: int) -> Any:
     from stable_baselines3.common.vec_env import VecNormalize
 
-    eval_venv = make_venv(hp["eval_env_id"] or env_id, 1, seed + 10_000, hp["env_kwargs"])
+    # The same wrapper stack as training's (SB3 syncs VecNormalize through it layer by layer).
+    kind = "batch" if hp["vec_env"] == "batch" else "dummy"
+    eval_venv = make_venv(hp["eval_env_id"] or env_id, 1, seed + 10_000, hp["env_kwargs"], kind)
     if hp["normalize"] is None:
         return eval_venv
     kwargs = {k: v for k, v in hp["normalize"].items() if k not in ("norm_reward", "training")}

@@ -40,7 +40,8 @@ class NavBatchVecEnv(VecEnv):
     """
 
     def __init__(self, env_id: str, num_envs: int, env_kwargs: dict[str, Any] | None = None):
-        kwargs = {**gym.spec(env_id).kwargs, **(env_kwargs or {})}
+        # "lrp_gym:LRPRadarNav-v0" as gym.make takes it: the module is this package.
+        kwargs = {**gym.spec(env_id.split(":")[-1]).kwargs, **(env_kwargs or {})}
         if kwargs.pop("render_mode", None) is not None:
             raise ValueError("env_kwargs: render_mode is not supported by the batched VecEnv")
         self.core = NavBatch(build_config(**kwargs), num_envs)

@@ -160,3 +160,14 @@ def test_ctrl_c_and_sigterm_save_a_checkpoint_stop_the_workers_and_resume(tmp_pa
     done = train(cfg, timesteps=steps + 1, out=tmp_path / "term", resume=True, progress_bar=False)
     assert done["status"] == "done" and done["resumed_from"] == steps
     assert done["timesteps"] == done["target_timesteps"] == steps + 128
+
+
+def test_training_on_the_batched_env_runs_and_resumes(tmp_path):
+    """``vec_env: batch``: the n_envs robots in one NavBatch (lrp_gym.envs.sb3)."""
+    cfg, run = config(tmp_path, n_envs=2, vec_env="batch"), tmp_path / "run"
+    info = train(cfg, timesteps=128, out=run, progress_bar=False)
+    assert info["status"] == "done" and info["timesteps"] == 128  # one rollout of 64 x 2
+    assert [s for s, _ in list_checkpoints(run)] == [128]
+    info = train(cfg, timesteps=256, out=run, resume=True, progress_bar=False)
+    assert info["resumed_from"] == 128 and info["timesteps"] == 256
+    assert np.isfinite(info["last_eval"]["mean_reward"])
