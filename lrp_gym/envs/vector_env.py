@@ -110,6 +110,9 @@ class LRPRadarNavVectorEnv(VectorEnv):
             mask = np.asarray(options["reset_mask"], dtype=bool)
             if mask.shape != (self.num_envs,):
                 raise ValueError(f"options['reset_mask'] must have shape ({self.num_envs},)")
+            never = [i for i in range(self.num_envs) if self._rngs[i] is None and not mask[i]]
+            if never:
+                raise ValueError(f"options['reset_mask']: robots {never} were never reset")
         infos: dict[str, Any] = {}
         for i in np.flatnonzero(mask):
             if seeds[i] is not None or self._rngs[i] is None:

@@ -88,6 +88,9 @@ def test_partial_reset_and_seed_list():
     assert list(part["_true_pose"]) == [False, True, False]
     np.testing.assert_array_equal(part["true_pose"][1], infos["true_pose"][1])
     np.testing.assert_array_equal(venv.core.pose[[0, 2]], before[[0, 2]])
+    fresh = LRPRadarNavVectorEnv(2, radar_fidelity="detections")
+    with pytest.raises(ValueError, match=r"robots \[1\] were never reset"):
+        fresh.reset(seed=0, options={"reset_mask": [True, False]})
 
 
 def test_bad_actions_name_the_argument():
