@@ -34,11 +34,6 @@ class ReflectorMonitorConfig(Strict):
     suspect_share: Annotated[float, Field(gt=0.0, le=1.0)] = 0.25
     clear_share: Fraction = 0.1
     gate_sigmas: PositiveFloat = 3.0
-    min_margin_db: float | None = Field(
-        default=None,
-        description="if set, a reflector counts as visible only where its return's margin "
-        "over one cell's noise (RCS-equivalent at 1 m, see reflector_monitor) reaches this",
-    )
     bias_m: PositiveFloat = Field(
         default=0.04,
         description="a reflector whose nearest return is on average this far from its "

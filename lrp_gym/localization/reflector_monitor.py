@@ -50,17 +50,11 @@ class ReflectorMonitor:
     cfg : ReflectorMonitorConfig
     max_range_m : float
         Farthest distance the radar reports a reflector at.
-    noise_rcs_dbsm : float, optional
-        The RCS at 1 m whose return equals the noise of one range-Doppler cell (from the
-        radar equation of the sensor); with it a reflector counts as visible only where its
-        return's margin over that, ``rcs_eff - 40 log10(r) - noise_rcs_dbsm``, reaches
-        ``cfg.min_margin_db``.
     """
 
     world: World
     cfg: ReflectorMonitorConfig
     max_range_m: float
-    noise_rcs_dbsm: float | None = None
 
     def __post_init__(self) -> None:
         m = len(self.world.layout)
@@ -82,31 +76,29 @@ class ReflectorMonitor:
 
     def visible(self, xy: np.ndarray) -> np.ndarray:
         """Boolean (M,): which reflectors the radar at floor position ``xy`` should see."""
+        return self._expected(xy)[1]
+
+    def _expected(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Predicted distances (M,) from floor position ``xy`` and which reflectors the radar
+        should see there (in range, facing it within ``min_gain``, no obstacle between)."""
         layout, room = self.world.layout, self.world.room
         radar = self.world.radar_position(np.asarray(xy, dtype=float))
         dist = layout.distances_m(radar)
         rcs_m2 = layout.effective_rcs_m2(radar)
         ok = (rcs_m2 >= self.cfg.min_gain * layout.rcs_m2) & (dist <= self.max_range_m)
-        if self.noise_rcs_dbsm is not None and self.cfg.min_margin_db is not None:
-            # A weak return (small reflector, far) is missed often by the radar itself.
-            margin_db = 10.0 * np.log10(np.maximum(rcs_m2, 1e-30)) - 40.0 * np.log10(dist)
-            ok &= margin_db - self.noise_rcs_dbsm >= self.cfg.min_margin_db
         if room.obstacles:
             starts = np.broadcast_to(radar, layout.positions_m.shape)
             ok &= ~room.segments_blocked(starts, layout.positions_m)
-        return ok
+        return dist, ok
 
     def update(self, estimate: PoseEstimate, gated: Fingerprint) -> bool:
         """Add one frame (``gated``: this frame's detections in each type's window); returns
         whether the suspect set changed. Frames without a converged estimate are skipped."""
         if not estimate.converged:
             return False
-        layout = self.world.layout
-        xy = estimate.pose[:2]
-        seen = self.visible(xy)
+        predicted, seen = self._expected(estimate.pose[:2])
         if not seen.any():
             return False
-        predicted = layout.distances_m(self.world.radar_position(xy))
         # A reflector whose distance is within two range cells of another one's shares its
         # returns (the peaks merge or shift): its misses there say nothing about it.
         gap = np.abs(predicted[:, None] - predicted[None, :])

@@ -184,9 +184,8 @@ class LocalizationStack:
         sensor = RadarSensor(world, cfg.radar)
         monitor = None
         if loc.reflector_monitor.enabled:
-            noise = float(sensor.rcs_dbsm(np.array([sensor.noise_cell]), np.ones(1))[0])
             max_r = float(tracker.classifier.max_range_m)
-            monitor = ReflectorMonitor(world, loc.reflector_monitor, max_r, noise)
+            monitor = ReflectorMonitor(world, loc.reflector_monitor, max_r)
         return cls(
             world,
             sensor,
