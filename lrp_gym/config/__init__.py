@@ -20,6 +20,7 @@ from lrp_gym.config.base import (
     Vec3,
 )
 from lrp_gym.config.localization import (
+    ClutterMapConfig,
     LocalizationConfig,
     MotionNoiseConfig,
     ReflectorMonitorConfig,
@@ -81,6 +82,7 @@ __all__ = [
     "KidnappingConfig",
     "LocalizationConfig",
     "ReflectorMonitorConfig",
+    "ClutterMapConfig",
     "MAX_ROOM_SIDE_M",
     "MissedDetectionsConfig",
     "MotionNoiseConfig",

@@ -62,6 +62,46 @@ class ReflectorMonitorConfig(Strict):
         return self
 
 
+class ClutterMapConfig(Strict):
+    """Unmapped static scatterers learnt while localised (lrp_gym.localization.clutter_map)."""
+
+    enabled: bool = True
+    gate_m: PositiveFloat = Field(
+        default=0.1,
+        description="a distance within this of a clutter point's predicted distance is its "
+        "return (the radar's 2.6 cm range noise, the estimate's and the point's errors)",
+    )
+    explain_gate_m: PositiveFloat = Field(
+        default=0.06,
+        description="a distance within this of a mapped reflector's or a known point's "
+        "predicted distance is no evidence of a new point",
+    )
+    window_frames: Annotated[int, Field(ge=4, le=1000)] = Field(
+        default=40, description="localised frames kept to search for new points"
+    )
+    min_observations: Annotated[int, Field(ge=4, le=1000)] = Field(
+        default=12, description="frames with a return at a point's distance, at least"
+    )
+    min_spread_m: PositiveFloat = Field(
+        default=0.15,
+        description="std of the radar positions across their main direction, at least: from "
+        "a straight line a point and its mirror image give the same distances",
+    )
+    max_rms_m: PositiveFloat = Field(
+        default=0.04, description="largest RMS distance residual of an accepted point's fit"
+    )
+    forget_frames: Annotated[int, Field(ge=1, le=100_000)] = Field(
+        default=40,
+        description="localised frames in range without a return before a point is forgotten",
+    )
+    max_points: Annotated[int, Field(ge=1, le=10_000)] = 32
+    dead_reckoning_frames: Annotated[int, Field(ge=0, le=10_000)] = Field(
+        default=20,
+        description="frames after the last converged estimate for which the clutter returns "
+        "are still taken out, predicted from that estimate and the odometry",
+    )
+
+
 class LocalizationConfig(Strict):
     method: Literal["amcl", "lut", "grid"] = "amcl"
     lut_resolution_m: PositiveFloat = 0.075
@@ -145,6 +185,7 @@ class LocalizationConfig(Strict):
     converged_std_m: PositiveFloat = 0.25
     converged_mass: Annotated[float, Field(gt=0.0, le=1.0)] = 0.9
     reflector_monitor: ReflectorMonitorConfig = ReflectorMonitorConfig()
+    clutter_map: ClutterMapConfig = ClutterMapConfig()
 
     @model_validator(mode="after")
     def _counts(self) -> LocalizationConfig:

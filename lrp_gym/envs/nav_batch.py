@@ -32,6 +32,8 @@ from lrp_gym.world import World, integrate_unicycle, noisy_odometry, wrap_angle
 # Progress is searched for in a window around the last value so it cannot jump along the path.
 _PROGRESS_BACK_M = 1.0
 _PROGRESS_WINDOW_M = 3.0
+# The estimated progress advances at most by the odometry's distance plus this per frame.
+_PROGRESS_SLACK_M = 0.25
 
 #: The reward terms of ``info["rewards"]`` (all zero at reset).
 REWARD_TERMS = ("progress", "time", "collision", "goal")
@@ -149,6 +151,7 @@ class NavBatch:
         new_pose, velocity_xy, collided = self._drive(prev, actions)
         self.pose[robots] = new_pose
         self.steps[robots] += 1
+        driven_m = np.zeros(len(robots))
         for k, i in enumerate(robots):
             rng = rngs[i]
             odo = noisy_odometry(self.world.odometry_noise, prev[k], self.pose[i], rng)
@@ -157,9 +160,10 @@ class NavBatch:
                 odo, moved = pert.move(self.frame_context(i), odo, rng)
                 if moved is not None:
                     self.pose[i] = moved
+            driven_m[k] = abs(float(odo[1]))
             self._sense(i, odo, velocity_xy[k], rng)
         self.last_action[robots] = actions
-        progress_m = np.array([self._update_progress(i) for i in robots])
+        progress_m = np.array([self._update_progress(i, d) for i, d in zip(robots, driven_m)])
         reached = np.array([self._goal_reached(i) for i in robots], dtype=bool)
         terms = self._reward_terms(progress_m, collided, reached)
         terminated = collided | reached
@@ -193,17 +197,24 @@ class NavBatch:
             and self.s_true_m[i] >= path.length_m - 2.0 * tol
         )
 
-    def _update_progress(self, i: int) -> float:
-        """Project robot ``i``'s true and estimated poses on its path; the true progress made."""
+    def _update_progress(self, i: int, driven_m: float) -> float:
+        """Project robot ``i``'s true and estimated poses on its path; the true progress made.
+
+        The estimated progress (what the observation's waypoints follow) gains at most the
+        distance the odometry reports, ``driven_m``, plus a slack: a wrong estimate for a few
+        frames (a global start's wrong mode, recovery particles) would otherwise carry it
+        two metres a frame along the path, and on a patrol a whole lap ahead of the robot,
+        which then stopped a lap early.
+        """
         s_prev = float(self.s_true_m[i])
         path = self.path(i)
         self.s_true_m[i] = path.project(
             self.pose[i, :2], max(s_prev - _PROGRESS_BACK_M, 0.0), _PROGRESS_WINDOW_M
         )
+        s_est = float(self.s_est_m[i])
+        back = min(s_est, _PROGRESS_BACK_M)
         self.s_est_m[i] = path.project(
-            self.estimate(i).pose[:2],
-            max(float(self.s_est_m[i]) - _PROGRESS_BACK_M, 0.0),
-            _PROGRESS_WINDOW_M,
+            self.estimate(i).pose[:2], s_est - back, back + driven_m + _PROGRESS_SLACK_M
         )
         return float(self.s_true_m[i]) - s_prev
 

@@ -91,9 +91,13 @@ class ReflectorMonitor:
             ok &= ~room.segments_blocked(starts, layout.positions_m)
         return dist, ok
 
-    def update(self, estimate: PoseEstimate, gated: Fingerprint) -> bool:
+    def update(
+        self, estimate: PoseEstimate, gated: Fingerprint, others_m: np.ndarray | None = None
+    ) -> bool:
         """Add one frame (``gated``: this frame's detections in each type's window); returns
-        whether the suspect set changed. Frames without a converged estimate are skipped."""
+        whether the suspect set changed. Frames without a converged estimate are skipped.
+        ``others_m``: predicted distances of other known static returns (the clutter map's
+        points), which a reflector's return merges with just as with another reflector's."""
         if not estimate.converged:
             return False
         predicted, seen = self._expected(estimate.pose[:2])
@@ -103,6 +107,8 @@ class ReflectorMonitor:
         # returns (the peaks merge or shift): its misses there say nothing about it.
         gap = np.abs(predicted[:, None] - predicted[None, :])
         np.fill_diagonal(gap, np.inf)
+        if others_m is not None and len(others_m):
+            gap = np.hstack([gap, np.abs(predicted[:, None] - np.asarray(others_m)[None, :])])
         seen &= gap.min(axis=1) >= 2.0 * self.world.fmcw.range_resolution_m
         if not seen.any():
             return False

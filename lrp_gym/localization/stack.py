@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from lrp_gym.config import ScenarioConfig
+from lrp_gym.localization.clutter_map import ClutterMap
 from lrp_gym.localization.factory import Localizer, make_localizer
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.lut import LookupTable
@@ -136,6 +137,7 @@ class LocalizationStack:
         map_aided: bool = True,
         use_ego: bool = True,
         monitor: ReflectorMonitor | None = None,
+        clutter_map: ClutterMap | None = None,
     ) -> None:
         if measurements not in ("detections", "tracks"):
             raise ValueError(
@@ -155,6 +157,10 @@ class LocalizationStack:
         self.use_ego = use_ego
         self.converged = False
         self.monitor = monitor
+        self.clutter_map = clutter_map
+        # The last converged estimate, moved by the odometry since, and the frames since.
+        self._anchor_pose: np.ndarray | None = None
+        self._unconverged_frames = 0
         # The localiser's model of the surveyed map, and the models without suspected
         # reflectors (keyed by the suspects; shared by spawned stacks: they are read-only).
         self._models: dict[tuple[int, ...], FingerprintModel] = {(): localizer.model}
@@ -186,6 +192,7 @@ class LocalizationStack:
         if loc.reflector_monitor.enabled:
             max_r = float(tracker.classifier.max_range_m)
             monitor = ReflectorMonitor(world, loc.reflector_monitor, max_r)
+        clutter_map = ClutterMap(world, loc.clutter_map) if loc.clutter_map.enabled else None
         return cls(
             world,
             sensor,
@@ -197,6 +204,7 @@ class LocalizationStack:
             map_aided=map_aided,
             use_ego=use_ego,
             monitor=monitor,
+            clutter_map=clutter_map,
         )
 
     def spawn(self) -> LocalizationStack:
@@ -213,6 +221,8 @@ class LocalizationStack:
         new.converged = False
         if self.monitor is not None:
             new.monitor = replace(self.monitor)  # fresh statistics (see __post_init__)
+        if self.clutter_map is not None:
+            new.clutter_map = replace(self.clutter_map)  # no points (see __post_init__)
         return new
 
     # ------------------------------------------------------------------ per-robot state
@@ -234,6 +244,10 @@ class LocalizationStack:
         self.sensor = self.surveyed_sensor
         if self.monitor is not None:
             self.monitor.reset()
+        if self.clutter_map is not None:
+            self.clutter_map.reset()
+        self._anchor_pose = None
+        self._unconverged_frames = 0
 
     def set_radar_layout(self, layout: ReflectorLayout) -> None:
         """Let the radar see ``layout`` until the next :meth:`reset`; the map stays surveyed.
@@ -319,6 +333,11 @@ class LocalizationStack:
             detections = frame
             fingerprint, estimate = self._track_and_localize(frame, ego, rng)
         self.converged = bool(estimate.converged)
+        if estimate.converged:
+            self._anchor_pose, self._unconverged_frames = estimate.pose, 0
+        elif self._anchor_pose is not None:
+            self._anchor_pose = apply_odometry(self._anchor_pose, ego.odometry)
+            self._unconverged_frames += 1
         suspects = self._check_reflectors(estimate) if detections is not None else ()
         t1 = time.perf_counter()
         lut_estimate, pose_estimate = self._with_lut(fingerprint, estimate)
@@ -333,7 +352,11 @@ class LocalizationStack:
         monitor = self.monitor
         if monitor is None:
             return ()
-        if monitor.update(estimate, self.tracker.gated_fingerprint()) and monitor.cfg.drop_suspects:
+        gated = self.tracker.gated_fingerprint()
+        others = None
+        if self.clutter_map is not None and len(self.clutter_map.points):
+            others = self.clutter_map.predicted_m(estimate.pose[:2])
+        if monitor.update(estimate, gated, others) and monitor.cfg.drop_suspects:
             key = monitor.suspects
             if key not in self._models:
                 self._models[key] = model_without(self.world, self.localizer.cfg, key)
@@ -374,7 +397,8 @@ class LocalizationStack:
         if self.measurements == "detections":
             window = tracker.classifier.candidates(detections)  # one window test, used twice
             gated = tracker.gated_fingerprint(detections, window)
-            weighed = gated if gated.count else None
+            weighed = self._declutter(gated, odometry)
+            weighed = weighed if weighed.count else None
             estimate = loc.update(odometry, weighed, rng, recovery=own_fit, speed_mps=ego.speed_mps)
             # This frame's posterior; it ranks the tracks only once converged (right after a
             # global start its heaviest mode may be a mirror image).
@@ -382,6 +406,7 @@ class LocalizationStack:
             if self.map_aided:
                 prior = self._prior(loc.particles[:, :2], loc.weights, estimate.converged)
             fingerprint = tracker.update(detections, self.dt_s, tracker_ego, prior, window)
+            self._learn_clutter(estimate, gated)
         else:
             # The cloud before this frame's update, moved by the odometry.
             prior = None
@@ -389,11 +414,39 @@ class LocalizationStack:
                 moved = apply_odometry(loc.particles, odometry)
                 prior = self._prior(moved[:, :2], loc.weights, self.converged)
             fingerprint = tracker.update(detections, self.dt_s, tracker_ego, prior)
+            weighed = self._declutter(fingerprint, odometry)
             estimate = loc.update(
-                odometry, fingerprint if fingerprint.count else None, rng, recovery=own_fit
+                odometry, weighed if weighed.count else None, rng, recovery=own_fit
             )
+            self._learn_clutter(estimate, tracker.gated_fingerprint())
         if not own_fit:
             # Tracks updated in this frame only: a coasting track follows the odometry, as a
             # lost filter's cloud does, and would keep its fit up after a kidnap.
-            loc.update_recovery(tracker.persistent_fingerprint(max_misses=0))
+            loc.update_recovery(
+                self._declutter(tracker.persistent_fingerprint(max_misses=0), odometry)
+            )
         return fingerprint, estimate
+
+    def _declutter(self, fingerprint: Fingerprint, odometry: np.ndarray) -> Fingerprint:
+        """``fingerprint`` without the known clutter points' returns, predicted from the last
+        converged estimate moved by the odometry since (``odometry``: this frame's).
+
+        Also for a few frames after the cloud stopped being converged: that is when the
+        clutter does its harm (a cloud spread by recovery particles finds poses where the
+        clutter sits at reflector distances), while the odometry still knows the pose well.
+        """
+        cmap = self.clutter_map
+        anchor = self._anchor_pose
+        if cmap is None or not len(cmap.points) or anchor is None:
+            return fingerprint
+        if self._unconverged_frames > cmap.cfg.dead_reckoning_frames:
+            return fingerprint
+        xy = apply_odometry(anchor, odometry)[:2]
+        return cmap.without_clutter(fingerprint, xy)
+
+    def _learn_clutter(self, estimate: PoseEstimate, gated: Fingerprint) -> None:
+        """Let the clutter map learn from this frame's tracks, on a converged estimate."""
+        if self.clutter_map is None or not estimate.converged:
+            return
+        model = self.localizer.model
+        self.clutter_map.update(estimate.pose[:2], gated, model.map_return_ranges)
