@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import gymnasium as gym
 import numpy as np
 import pytest
 
 from lrp_gym.config import ScenarioError, load_scenario
+from lrp_gym.envs import nav_batch
 from lrp_gym.experiments.episodes import nav_env
 
 PATROLS = ("ipin2023-patrol", "ipin2023-2types-patrol")
@@ -78,5 +81,38 @@ def test_progress_starts_at_the_start_of_the_path(name):
         assert base.cfg.localization.init == "uniform"
         assert base.core.s_true_m[0] == pytest.approx(0.0)
         assert base.core.s_est_m[0] <= 3.0 < base.path.length_m / base.cfg.task.laps
+    finally:
+        env.close()
+
+
+def test_estimated_progress_advances_no_faster_than_the_odometry(monkeypatch):
+    """A wrong estimate (here: forced to the far side of the loop every frame) may not carry
+    the estimated progress further than the reported odometry plus the slack: on a patrol it
+    used to run a lap ahead of the robot, which then stopped a lap early (a timeout)."""
+    env = gym.make("LRPRadarNavFast-v0", scenario="ipin2023-2types-patrol")
+    try:
+        env.reset(seed=0)
+        base = nav_env(env)
+        core = base.core
+        far = np.array([*np.asarray(base.cfg.task.path)[7], 0.0])
+        real_estimate = core.estimate
+        monkeypatch.setattr(core, "estimate", lambda i: replace(real_estimate(i), pose=far))
+        driven: list[float] = []
+        real_odometry = nav_batch.noisy_odometry
+
+        def spy(*args, **kwargs):
+            odo = real_odometry(*args, **kwargs)
+            driven.append(abs(float(odo[1])))
+            return odo
+
+        monkeypatch.setattr(nav_batch, "noisy_odometry", spy)
+        gains = []
+        for _ in range(8):
+            before = float(core.s_est_m[0])
+            env.step(np.array([1.0, 0.0], dtype=np.float32))
+            gains.append(float(core.s_est_m[0]) - before)
+        slack = nav_batch._PROGRESS_SLACK_M
+        assert all(g <= d + slack + 1e-9 for g, d in zip(gains, driven, strict=True))
+        assert sum(gains) > 1.0  # it does follow the estimate, as fast as the robot drives
     finally:
         env.close()
