@@ -37,14 +37,16 @@ from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
 
 #: Localised frames between two searches for a new point.
-_SEARCH_EVERY = 4
+_SEARCH_EVERY = 8
 #: A known point takes the nearest distance within this many ``gate_m`` as a new observation,
 _REFINE_GATE = 1.5
 #: keeps this many (the newest) and is refitted after every this many.
 _MAX_POINT_OBSERVATIONS = 80
-_REFIT_EVERY = 8
+_REFIT_EVERY = 16
 #: Gauss-Newton refinements after the linear start.
 _REFINE_STEPS = 8
+#: ... and when refining a known point.
+_REFIT_STEPS = 3
 #: A point whose distances are within this of a predicted room return ...
 _ROOM_RETURN_TOL_M = 0.05
 #: ... in this share of its frames is that room return; by chance, with ~8 room returns per
@@ -55,7 +57,9 @@ _ROOM_RETURN_SHARE = 0.8
 MapRanges = Callable[[np.ndarray], "np.ndarray | None"]
 
 
-def fit_point(radar_xy: np.ndarray, ranges_m: np.ndarray) -> tuple[np.ndarray, float]:
+def fit_point(
+    radar_xy: np.ndarray, ranges_m: np.ndarray, start: np.ndarray | None = None
+) -> tuple[np.ndarray, float]:
     """The static point that best explains distances measured from radar positions in a plane.
 
     Parameters
@@ -64,6 +68,8 @@ def fit_point(radar_xy: np.ndarray, ranges_m: np.ndarray) -> tuple[np.ndarray, f
         Radar positions over the floor (all at the same height), m.
     ranges_m : ndarray (K,)
         Distances measured from them, m.
+    start : ndarray (3,), optional
+        A point to refine (a refit); else the linear solution below.
 
     Returns
     -------
@@ -79,16 +85,21 @@ def fit_point(radar_xy: np.ndarray, ranges_m: np.ndarray) -> tuple[np.ndarray, f
     """
     p = np.asarray(radar_xy, dtype=float)
     r = np.asarray(ranges_m, dtype=float)
-    a = np.column_stack([-2.0 * p, np.ones(len(p))])
-    sol, *_ = np.linalg.lstsq(a, r**2 - np.sum(p**2, axis=1), rcond=None)
-    q = sol[:2]
-    h = float(np.sqrt(max(sol[2] - q @ q, 1e-4)))
-    x = np.array([*q, h])
-    for _ in range(_REFINE_STEPS):
+    if start is None:
+        a = np.column_stack([-2.0 * p, np.ones(len(p))])
+        sol, *_ = np.linalg.lstsq(a, r**2 - np.sum(p**2, axis=1), rcond=None)
+        q = sol[:2]
+        x = np.array([*q, float(np.sqrt(max(sol[2] - q @ q, 1e-4)))])
+    else:
+        x = np.asarray(start, dtype=float).copy()
+    for _ in range(_REFINE_STEPS if start is None else _REFIT_STEPS):
         d = np.column_stack([x[0] - p[:, 0], x[1] - p[:, 1], np.full(len(p), x[2])])
         pred = np.maximum(np.linalg.norm(d, axis=1), 1e-9)
         jac = d / pred[:, None]
-        step, *_ = np.linalg.lstsq(jac, r - pred, rcond=None)
+        try:
+            step = np.linalg.solve(jac.T @ jac, jac.T @ (r - pred))
+        except np.linalg.LinAlgError:  # degenerate geometry: keep the last point
+            break
         x = x + step
         x[2] = abs(x[2])
         if np.max(np.abs(step)) < 1e-6:
@@ -158,6 +169,7 @@ class ClutterMap:
     points: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
+        self._size_m = np.asarray(self.world.room.size_m, dtype=float)
         self.reset()
 
     def reset(self) -> None:
@@ -166,6 +178,7 @@ class ClutterMap:
         self._unseen = np.zeros(0, dtype=np.int64)  # localised frames without a return
         # Per point, the (x, y, distance) it was fitted to and has matched since.
         self._point_obs: list[list[tuple[float, float, float]]] = []
+        self._matched = np.zeros(0, dtype=np.int64)  # per point, observations since its fit
         # The last localised frames: radar position (2,) and the unexplained distances.
         self._frames: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=self.cfg.window_frames)
         self._since_search = 0
@@ -177,6 +190,7 @@ class ClutterMap:
         self._unseen = np.append(self._unseen, 0)
         rows = [] if observations is None else [tuple(map(float, o)) for o in observations]
         self._point_obs.append(rows)
+        self._matched = np.append(self._matched, 0)
 
     def predicted_m(self, xy: np.ndarray) -> np.ndarray:
         """Distances (P,) from the radar at floor position ``xy`` to the points."""
@@ -245,26 +259,24 @@ class ClutterMap:
             return
         frames = list(self._frames)
         pos = np.array([f[0] for f in frames])
+        size = self._size_m
         cand = point_hypotheses(pos, [f[1] for f in frames], cfg.min_spread_m)
+        cand = cand[_inside(cand, size)]
         if not len(cand):
             return
         # Per hypothesis and frame, the distance nearest the predicted one.
         pred = np.sqrt(
             np.sum((pos[None, :, :] - cand[:, None, :2]) ** 2, axis=-1) + cand[:, 2:3] ** 2
         )
-        hits = np.zeros(pred.shape, dtype=bool)
-        for k, (_, z) in enumerate(frames):
-            if len(z):
-                hits[:, k] = np.min(np.abs(z[None, :] - pred[:, k : k + 1]), axis=1) <= cfg.gate_m
+        nearest = _nearest(pred, [f[1] for f in frames])
+        hits = np.abs(nearest - pred) <= cfg.gate_m
         best = int(np.argmax(hits.sum(axis=1)))
         inl = np.flatnonzero(hits[best])
         if len(inl) < cfg.min_observations or cross_spread_m(pos[inl]) < cfg.min_spread_m:
             return
-        r = np.array([frames[k][1][np.argmin(np.abs(frames[k][1] - pred[best, k]))] for k in inl])
+        r = nearest[best, inl]
         point, rms = fit_point(pos[inl], r)
-        size = np.asarray(self.world.room.size_m, dtype=float)
-        inside = bool(np.all(point[:2] >= -0.1) and np.all(point[:2] <= size[:2] + 0.1))
-        if rms > cfg.max_rms_m or not inside:
+        if rms > cfg.max_rms_m or not _inside(point[None], size)[0]:
             return
         # Its returns are used up either way: a room return is searched for only once.
         for k, rk in zip(inl, r, strict=True):
@@ -272,7 +284,20 @@ class ClutterMap:
             self._frames[k] = (xy_k, z_k[z_k != rk])
         if map_ranges is not None and _is_room_return(pos[inl], r, map_ranges):
             return
-        self.add(point, np.column_stack([pos[inl], r]))
+        rows = np.column_stack([pos[inl], r])
+        if len(self.points):
+            # A known point whose prediction drifted past the explain gate: the same point.
+            known = np.sqrt(
+                np.sum((pos[inl][None, :, :] - self.points[:, None, :2]) ** 2, axis=-1)
+                + self.points[:, 2:3] ** 2
+            )
+            same = np.mean(np.abs(known - r[None, :]) <= cfg.gate_m, axis=1)
+            j = int(np.argmax(same))
+            if same[j] >= 0.5:
+                self._point_obs[j].extend(map(tuple, rows))
+                del self._point_obs[j][:-_MAX_POINT_OBSERVATIONS]
+                return
+        self.add(point, rows)
 
     def _refresh(self, xy: np.ndarray, z: np.ndarray) -> None:
         """Count localised frames without a distance ``z`` near each point's; forget the
@@ -292,6 +317,7 @@ class ClutterMap:
         keep = self._unseen <= self.cfg.forget_frames
         self.points, self._unseen = self.points[keep], self._unseen[keep]
         self._point_obs = [o for o, k in zip(self._point_obs, keep, strict=True) if k]
+        self._matched = self._matched[keep]
 
     def _refine(self, xy: np.ndarray, z: np.ndarray, pred: np.ndarray) -> None:
         """Add this frame's nearest distance to each point's observations and refit now and
@@ -305,18 +331,54 @@ class ClutterMap:
             obs = self._point_obs[j]
             obs.append((xy[0], xy[1], float(z[nearest[j]])))
             del obs[:-_MAX_POINT_OBSERVATIONS]
-            if len(obs) % _REFIT_EVERY == 0:
-                o = np.array(obs)
-                point, rms = fit_point(o[:, :2], o[:, 2])
-                # Once more without the outliers (another return that came near).
-                res = np.abs(
-                    np.sqrt(np.sum((o[:, :2] - point[:2]) ** 2, axis=1) + point[2] ** 2) - o[:, 2]
-                )
-                ok = res <= 3.0 * max(rms, 0.02)
-                if ok.sum() >= self.cfg.min_observations:
-                    point, rms = fit_point(o[ok, :2], o[ok, 2])
-                if rms <= self.cfg.max_rms_m:
-                    self.points[j] = point
+            self._matched[j] += 1
+            if self._matched[j] % _REFIT_EVERY == 0:
+                self._refit(j, np.array(obs))
+
+    def _refit(self, j: int, obs: np.ndarray) -> None:
+        """Refit point ``j`` to its observations (x, y, distance); kept when it explains the
+        inliers (within ``gate_m`` of the current prediction: another return may have come
+        near) better than the current point does."""
+        xy, r = obs[:, :2], obs[:, 2]
+        current = self.points[j]
+        res = np.abs(np.sqrt(np.sum((xy - current[:2]) ** 2, axis=1) + current[2] ** 2) - r)
+        ok = res <= self.cfg.gate_m
+        if ok.sum() < self.cfg.min_observations:
+            return
+        point, rms = fit_point(xy[ok], r[ok], start=current)
+        if rms < float(np.sqrt(np.mean(res[ok] ** 2))) and _inside(point[None], self._size_m)[0]:
+            self.points[j] = point
+
+
+def _inside(points: np.ndarray, size_m: np.ndarray, margin_m: float = 0.1) -> np.ndarray:
+    """Which points (P, 3) lie over the room's floor (within ``margin_m``) and no higher off
+    the radar's plane than the room is tall."""
+    return (
+        np.all(points[:, :2] >= -margin_m, axis=1)
+        & np.all(points[:, :2] <= size_m[:2] + margin_m, axis=1)
+        & (points[:, 2] <= size_m[2])
+    )
+
+
+def _nearest(pred: np.ndarray, ranges_m: list[np.ndarray]) -> np.ndarray:
+    """Per hypothesis and frame (H, K), the frame's distance nearest ``pred`` (inf without
+    any): one sorted search over all frames, each frame's distances shifted apart."""
+    h, k = pred.shape
+    span = (
+        2.0
+        * max(float(np.max(pred, initial=0.0)), *(float(np.max(z, initial=0.0)) for z in ranges_m))
+        + 1.0
+    )
+    z = np.concatenate([np.sort(zk) + i * span for i, zk in enumerate(ranges_m)] + [np.zeros(0)])
+    if not len(z):
+        return np.full(pred.shape, np.inf)
+    q = pred + np.arange(k)[None, :] * span
+    idx = np.searchsorted(z, q)
+    lo = z[np.clip(idx - 1, 0, len(z) - 1)]
+    hi = z[np.clip(idx, 0, len(z) - 1)]
+    out = np.where(np.abs(lo - q) <= np.abs(hi - q), lo, hi) - np.arange(k)[None, :] * span
+    # A neighbour from another frame is more than ``span`` / 2 away: no distance in this one.
+    return np.where(np.abs(out - pred) < span / 2.0, out, np.inf)
 
 
 def _is_room_return(radar_xy: np.ndarray, ranges_m: np.ndarray, map_ranges: MapRanges) -> bool:
