@@ -176,6 +176,12 @@ class LocalizationConfig(Strict):
     alpha_slow: Fraction = 0.02
     alpha_fast: Fraction = 0.3
     max_random_fraction: Fraction = 0.25
+    slip_adaptive: bool = Field(
+        default=False,
+        description="inflate the motion noise while the converged estimate keeps moving away "
+        "from where the odometry alone would put it (wheel slip; lrp_gym.localization.slip)",
+    )
+    slip_max_inflation: Annotated[float, Field(ge=1.0, le=100.0)] = 4.0
     recovery_fit_ratio: Annotated[float, Field(gt=0.0, le=1.0)] = 0.8
     estimator: Literal["best_k", "cluster"] = "cluster"
     estimate_best_k: Annotated[int, Field(ge=1)] = 20

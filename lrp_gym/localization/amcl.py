@@ -45,6 +45,7 @@ from lrp_gym.localization.resampling import (
     mode_preserving_resample,
     systematic_resample,
 )
+from lrp_gym.localization.slip import SlipMonitor
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
 
@@ -79,6 +80,9 @@ class Amcl:
         self.cfg = cfg
         self.model = FingerprintModel.for_world(world, cfg)
         self.motion_noise = odometry_noise(cfg)
+        self.slip = (
+            SlipMonitor(self.motion_noise, cfg.slip_max_inflation) if cfg.slip_adaptive else None
+        )
         self.clearance_m = float(world.robot.radius_m)
         self._size_xy = np.asarray(world.room.size_m[:2], dtype=float)
         self._simple_room = not world.room.obstacles
@@ -109,6 +113,8 @@ class Amcl:
         weights and lost test (call :meth:`reset` before use)."""
         new = copy.copy(self)
         new.lost = self._new_lost_test()
+        if self.slip is not None:
+            new.slip = SlipMonitor(self.motion_noise, self.cfg.slip_max_inflation)
         new.particles, new.weights = np.zeros((0, 3)), np.zeros(0)
         new._predicted = new._grid_loglik = None
         return new
@@ -174,6 +180,8 @@ class Amcl:
         self._n_fits = 0  # fits averaged since reset: the first one sets both averages
         self._predicted = None
         self.lost.reset()
+        if self.slip is not None:
+            self.slip.reset()
         self._grid_loglik = None
         # A uniform prior is drawn from the first frame's likelihood (sensor-based start).
         self._pending_global = bool(
@@ -204,7 +212,8 @@ class Amcl:
         if len(self.particles) == 0:
             raise RuntimeError("call reset() before update()")
         cfg = self.cfg
-        self.particles = sample_motion(self.particles, odometry, self.motion_noise, rng)
+        noise = self.motion_noise if self.slip is None else self.slip.noise()
+        self.particles = sample_motion(self.particles, odometry, noise, rng)
         w = self.weights * self._free(self.particles[:, :2])
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
@@ -227,6 +236,8 @@ class Amcl:
         self.weights = w / total
         ess = effective_sample_size(self.weights)
         estimate = self._estimate(ess)
+        if self.slip is not None:
+            self.slip.update(odometry, estimate.pose, estimate.converged)
         n = len(self.weights)
         self.n_injected = 0
         # The lost test asks for recovery particles too, once past its threshold.
