@@ -24,8 +24,9 @@ import numpy as np
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.envs.observations import NavSnapshot, ObservationType, make_observation
 from lrp_gym.envs.task import WaypointPath, sample_goal_task
+from lrp_gym.localization.frame_result import FrameResult
 from lrp_gym.localization.pose_estimate import PoseEstimate
-from lrp_gym.localization.stack import FrameResult, LocalizationStack
+from lrp_gym.localization.stack import LocalizationStack
 from lrp_gym.perturbations import FrameContext, PerturbationSet
 from lrp_gym.world import World, integrate_unicycle, noisy_odometry, wrap_angle
 

@@ -19,9 +19,10 @@ from lrp_gym.config import ScenarioConfig, load_scenario
 from lrp_gym.envs.nav_batch import REWARD_TERMS, NavBatch
 from lrp_gym.envs.task import WaypointPath
 from lrp_gym.localization.factory import Localizer
+from lrp_gym.localization.frame_result import FrameResult
 from lrp_gym.localization.lut import LookupTable
 from lrp_gym.localization.pose_estimate import PoseEstimate
-from lrp_gym.localization.stack import FrameResult, LocalizationStack
+from lrp_gym.localization.stack import LocalizationStack
 from lrp_gym.perturbations import PerturbationSet
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor

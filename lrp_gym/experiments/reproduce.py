@@ -24,8 +24,9 @@ import numpy as np
 from lrp_gym.config import LocalizationConfig, ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.factory import Localizer, make_localizer
+from lrp_gym.localization.frame_result import FrameResult
 from lrp_gym.localization.lut import LookupTable
-from lrp_gym.localization.stack import FrameResult, LocalizationStack
+from lrp_gym.localization.stack import LocalizationStack
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint

@@ -25,7 +25,6 @@ in a plane, a point and its mirror image in that plane give the same distances.
 
 from __future__ import annotations
 
-import itertools
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -33,7 +32,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lrp_gym.config.localization import ClutterMapConfig
+from lrp_gym.localization.point_fit import (
+    cross_spread_m,
+    fit_point,
+    inside_room,
+    nearest_distances,
+    point_hypotheses,
+)
 from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.world.robot import apply_odometry
 from lrp_gym.world.world import World
 
 #: Localised frames between two searches for a new point.
@@ -43,10 +50,6 @@ _REFINE_GATE = 1.5
 #: keeps this many (the newest) and is refitted after every this many.
 _MAX_POINT_OBSERVATIONS = 80
 _REFIT_EVERY = 16
-#: Gauss-Newton refinements after the linear start.
-_REFINE_STEPS = 8
-#: ... and when refining a known point.
-_REFIT_STEPS = 3
 #: A point whose distances are within this of a predicted room return ...
 _ROOM_RETURN_TOL_M = 0.05
 #: ... in this share of its frames is that room return; by chance, with ~8 room returns per
@@ -55,97 +58,6 @@ _ROOM_RETURN_SHARE = 0.8
 
 #: Positions (N, 2) -> predicted room-return distances (K, N), or None without any.
 MapRanges = Callable[[np.ndarray], "np.ndarray | None"]
-
-
-def fit_point(
-    radar_xy: np.ndarray, ranges_m: np.ndarray, start: np.ndarray | None = None
-) -> tuple[np.ndarray, float]:
-    """The static point that best explains distances measured from radar positions in a plane.
-
-    Parameters
-    ----------
-    radar_xy : ndarray (K, 2)
-        Radar positions over the floor (all at the same height), m.
-    ranges_m : ndarray (K,)
-        Distances measured from them, m.
-    start : ndarray (3,), optional
-        A point to refine (a refit); else the linear solution below.
-
-    Returns
-    -------
-    point : ndarray (3,)
-        ``(x_m, y_m, h_m)``: floor position and height above (or below) the radar plane.
-    rms_m : float
-        RMS of the distance residuals.
-
-    Notes
-    -----
-    ``r^2 - |p|^2 = -2 p.q + (|q|^2 + h^2)`` is linear in ``(q, c = |q|^2 + h^2)``: a linear
-    least-squares start, then Gauss-Newton on the distances themselves.
-    """
-    p = np.asarray(radar_xy, dtype=float)
-    r = np.asarray(ranges_m, dtype=float)
-    if start is None:
-        a = np.column_stack([-2.0 * p, np.ones(len(p))])
-        sol, *_ = np.linalg.lstsq(a, r**2 - np.sum(p**2, axis=1), rcond=None)
-        q = sol[:2]
-        x = np.array([*q, float(np.sqrt(max(sol[2] - q @ q, 1e-4)))])
-    else:
-        x = np.asarray(start, dtype=float).copy()
-    for _ in range(_REFINE_STEPS if start is None else _REFIT_STEPS):
-        d = np.column_stack([x[0] - p[:, 0], x[1] - p[:, 1], np.full(len(p), x[2])])
-        pred = np.maximum(np.linalg.norm(d, axis=1), 1e-9)
-        jac = d / pred[:, None]
-        try:
-            step = np.linalg.solve(jac.T @ jac, jac.T @ (r - pred))
-        except np.linalg.LinAlgError:  # degenerate geometry: keep the last point
-            break
-        x = x + step
-        x[2] = abs(x[2])
-        if np.max(np.abs(step)) < 1e-6:
-            break
-    pred = np.sqrt((x[0] - p[:, 0]) ** 2 + (x[1] - p[:, 1]) ** 2 + x[2] ** 2)
-    return x, float(np.sqrt(np.mean((r - pred) ** 2)))
-
-
-def cross_spread_m(radar_xy: np.ndarray) -> float:
-    """Std of the positions across their main direction (0 for positions on one line)."""
-    p = np.asarray(radar_xy, dtype=float)
-    if len(p) < 3:
-        return 0.0
-    return float(np.sqrt(max(np.linalg.eigvalsh(np.cov(p.T))[0], 0.0)))
-
-
-def point_hypotheses(
-    radar_xy: np.ndarray, ranges_m: list[np.ndarray], min_spread_m: float, anchors: int = 5
-) -> np.ndarray:
-    """Candidate static points (H, 3) from triples of buffered frames.
-
-    ``anchors`` frames spread evenly over the buffer; every triple of them whose positions
-    span a triangle (not a line: ``min_spread_m``) and every choice of one distance per frame
-    of the triple is solved exactly (three equations of :func:`fit_point`'s linear form).
-    A point missed in some frames is still found from the triples that saw it. Without
-    randomness, so a seed still fixes the run.
-    """
-    p = np.asarray(radar_xy, dtype=float)
-    picks = np.unique(np.linspace(0, len(p) - 1, anchors).round().astype(int))
-    out = []
-    for i, j, k in itertools.combinations(picks, 3):
-        zs = [ranges_m[i], ranges_m[j], ranges_m[k]]
-        q = p[[i, j, k]]
-        # Twice the triangle's area over its longest side: the height of the triangle.
-        u, v = q[1] - q[0], q[2] - q[0]
-        area2 = abs(u[0] * v[1] - u[1] * v[0])
-        side = max(np.linalg.norm(q[1] - q[0]), np.linalg.norm(q[2] - q[0]), 1e-9)
-        if any(len(z) == 0 for z in zs) or area2 / side < min_spread_m:
-            continue
-        r = np.stack(np.meshgrid(*zs, indexing="ij"), axis=-1).reshape(-1, 3)
-        a_mat = np.column_stack([-2.0 * q, np.ones(3)])
-        sol = np.linalg.solve(a_mat, (r**2 - np.sum(q**2, axis=1)).T).T  # qx, qy, c
-        h2 = sol[:, 2] - np.sum(sol[:, :2] ** 2, axis=1)
-        ok = h2 > -0.05  # a small negative h^2 is noise on a point in the radar's plane
-        out.append(np.column_stack([sol[ok, :2], np.sqrt(np.maximum(h2[ok], 0.0))]))
-    return np.concatenate(out) if out else np.zeros((0, 3))
 
 
 @dataclass
@@ -179,16 +91,48 @@ class ClutterMap:
         # Per point, the (x, y, distance) it was fitted to and has matched since.
         self._point_obs: list[list[tuple[float, float, float]]] = []
         self._matched = np.zeros(0, dtype=np.int64)  # per point, observations since its fit
+        # The last converged estimate, moved by the odometry since, and the frames since.
+        self._anchor_pose: np.ndarray | None = None
+        self._unconverged_frames = 0
         # The last localised frames: radar position (2,) and the unexplained distances.
         self._frames: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=self.cfg.window_frames)
         self._since_search = 0
+
+    def follow(self, pose: np.ndarray, converged: bool, odometry: np.ndarray) -> None:
+        """Keep the pose the points are predicted from: this frame's estimate when it has
+        converged, else the last converged one moved by this frame's ``odometry``."""
+        if converged:
+            self._anchor_pose, self._unconverged_frames = np.asarray(pose, dtype=float), 0
+        elif self._anchor_pose is not None:
+            self._anchor_pose = apply_odometry(self._anchor_pose, odometry)
+            self._unconverged_frames += 1
+
+    def declutter(self, fingerprint: Fingerprint, odometry: np.ndarray) -> Fingerprint:
+        """``fingerprint`` without the points' returns, predicted from the anchor pose moved by
+        this frame's ``odometry`` (:meth:`without_clutter`).
+
+        Also for ``dead_reckoning_frames`` frames after the estimate stopped being converged:
+        that is when clutter does its harm (a cloud spread by recovery particles finds poses
+        where the clutter sits at reflector distances), while the odometry still knows the
+        pose well.
+        """
+        anchor = self._anchor_pose
+        if not len(self.points) or anchor is None:
+            return fingerprint
+        if self._unconverged_frames > self.cfg.dead_reckoning_frames:
+            return fingerprint
+        return self.without_clutter(fingerprint, apply_odometry(anchor, odometry)[:2])
 
     def add(self, point: np.ndarray, observations: np.ndarray | None = None) -> None:
         """Add a point ``(x_m, y_m, h_m)`` (and the ``(x, y, distance)`` rows it was fitted
         to, which later refits build on)."""
         self.points = np.vstack([self.points, np.asarray(point, dtype=float)[None, :3]])
         self._unseen = np.append(self._unseen, 0)
-        rows = [] if observations is None else [tuple(map(float, o)) for o in observations]
+        rows = (
+            []
+            if observations is None
+            else [(float(a), float(b), float(c)) for a, b, c in observations]
+        )
         self._point_obs.append(rows)
         self._matched = np.append(self._matched, 0)
 
@@ -261,14 +205,14 @@ class ClutterMap:
         pos = np.array([f[0] for f in frames])
         size = self._size_m
         cand = point_hypotheses(pos, [f[1] for f in frames], cfg.min_spread_m)
-        cand = cand[_inside(cand, size)]
+        cand = cand[inside_room(cand, size)]
         if not len(cand):
             return
         # Per hypothesis and frame, the distance nearest the predicted one.
         pred = np.sqrt(
             np.sum((pos[None, :, :] - cand[:, None, :2]) ** 2, axis=-1) + cand[:, 2:3] ** 2
         )
-        nearest = _nearest(pred, [f[1] for f in frames])
+        nearest = nearest_distances(pred, [f[1] for f in frames])
         hits = np.abs(nearest - pred) <= cfg.gate_m
         best = int(np.argmax(hits.sum(axis=1)))
         inl = np.flatnonzero(hits[best])
@@ -276,7 +220,7 @@ class ClutterMap:
             return
         r = nearest[best, inl]
         point, rms = fit_point(pos[inl], r)
-        if rms > cfg.max_rms_m or not _inside(point[None], size)[0]:
+        if rms > cfg.max_rms_m or not inside_room(point[None], size)[0]:
             return
         # Its returns are used up either way: a room return is searched for only once.
         for k, rk in zip(inl, r, strict=True):
@@ -333,7 +277,7 @@ class ClutterMap:
             del obs[:-_MAX_POINT_OBSERVATIONS]
             self._matched[j] += 1
             if self._matched[j] % _REFIT_EVERY == 0:
-                self._refit(j, np.array(obs))
+                self._refit(int(j), np.array(obs))
 
     def _refit(self, j: int, obs: np.ndarray) -> None:
         """Refit point ``j`` to its observations (x, y, distance); kept when it explains the
@@ -346,39 +290,11 @@ class ClutterMap:
         if ok.sum() < self.cfg.min_observations:
             return
         point, rms = fit_point(xy[ok], r[ok], start=current)
-        if rms < float(np.sqrt(np.mean(res[ok] ** 2))) and _inside(point[None], self._size_m)[0]:
+        if (
+            rms < float(np.sqrt(np.mean(res[ok] ** 2)))
+            and inside_room(point[None], self._size_m)[0]
+        ):
             self.points[j] = point
-
-
-def _inside(points: np.ndarray, size_m: np.ndarray, margin_m: float = 0.1) -> np.ndarray:
-    """Which points (P, 3) lie over the room's floor (within ``margin_m``) and no higher off
-    the radar's plane than the room is tall."""
-    return (
-        np.all(points[:, :2] >= -margin_m, axis=1)
-        & np.all(points[:, :2] <= size_m[:2] + margin_m, axis=1)
-        & (points[:, 2] <= size_m[2])
-    )
-
-
-def _nearest(pred: np.ndarray, ranges_m: list[np.ndarray]) -> np.ndarray:
-    """Per hypothesis and frame (H, K), the frame's distance nearest ``pred`` (inf without
-    any): one sorted search over all frames, each frame's distances shifted apart."""
-    h, k = pred.shape
-    span = (
-        2.0
-        * max(float(np.max(pred, initial=0.0)), *(float(np.max(z, initial=0.0)) for z in ranges_m))
-        + 1.0
-    )
-    z = np.concatenate([np.sort(zk) + i * span for i, zk in enumerate(ranges_m)] + [np.zeros(0)])
-    if not len(z):
-        return np.full(pred.shape, np.inf)
-    q = pred + np.arange(k)[None, :] * span
-    idx = np.searchsorted(z, q)
-    lo = z[np.clip(idx - 1, 0, len(z) - 1)]
-    hi = z[np.clip(idx, 0, len(z) - 1)]
-    out = np.where(np.abs(lo - q) <= np.abs(hi - q), lo, hi) - np.arange(k)[None, :] * span
-    # A neighbour from another frame is more than ``span`` / 2 away: no distance in this one.
-    return np.where(np.abs(out - pred) < span / 2.0, out, np.inf)
 
 
 def _is_room_return(radar_xy: np.ndarray, ranges_m: np.ndarray, map_ranges: MapRanges) -> bool:

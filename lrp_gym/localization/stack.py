@@ -23,13 +23,14 @@ from __future__ import annotations
 import copy
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.localization.clutter_map import ClutterMap
 from lrp_gym.localization.factory import Localizer, make_localizer
+from lrp_gym.localization.frame_result import FrameResult
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.lut import LookupTable
 from lrp_gym.localization.pose_estimate import PoseEstimate
@@ -47,40 +48,6 @@ from lrp_gym.world.world import World
 #: ``filter_detections`` hook of :meth:`LocalizationStack.step`: the radar's detections in,
 #: the detections the tracker and the localiser receive out.
 DetectionFilter = Callable[[Detections], Detections]
-
-
-@dataclass(frozen=True)
-class FrameResult:
-    """What one frame of the stack produced.
-
-    Attributes
-    ----------
-    detections : Detections or None
-        The radar's detections (after any ``filter_detections`` hook); None when the frame was
-        a fingerprint (radar and tracker bypassed, :meth:`LocalizationStack.localize`).
-    fingerprint : Fingerprint
-        The tracker's fingerprint (or the given one).
-    localizer_estimate : PoseEstimate
-        The localiser's (AMCL's or the grid filter's) estimate after this frame.
-    lut_estimate : PoseEstimate or None
-        The look-up table's answer to ``fingerprint`` (position only), if the stack has one.
-    estimate : PoseEstimate
-        The pose a consumer should use: the localiser's, or with a look-up table its position
-        with the localiser's heading.
-    elapsed_s : dict
-        Wall time of the stages run in this frame: ``radar``, ``tracking_localization``, ``lut``.
-    suspect_reflectors : tuple of int
-        Layout indices of the reflectors the reflector monitor suspects of being moved or
-        missing (:mod:`~lrp_gym.localization.reflector_monitor`); empty without a monitor.
-    """
-
-    detections: Detections | None
-    fingerprint: Fingerprint
-    localizer_estimate: PoseEstimate
-    lut_estimate: PoseEstimate | None
-    estimate: PoseEstimate
-    elapsed_s: dict[str, float] = field(default_factory=dict, compare=False)
-    suspect_reflectors: tuple[int, ...] = ()
 
 
 class LocalizationStack:
@@ -158,9 +125,6 @@ class LocalizationStack:
         self.converged = False
         self.monitor = monitor
         self.clutter_map = clutter_map
-        # The last converged estimate, moved by the odometry since, and the frames since.
-        self._anchor_pose: np.ndarray | None = None
-        self._unconverged_frames = 0
         # The localiser's model of the surveyed map, and the models without suspected
         # reflectors (keyed by the suspects; shared by spawned stacks: they are read-only).
         self._models: dict[tuple[int, ...], FingerprintModel] = {(): localizer.model}
@@ -192,7 +156,6 @@ class LocalizationStack:
         if loc.reflector_monitor.enabled:
             max_r = float(tracker.classifier.max_range_m)
             monitor = ReflectorMonitor(world, loc.reflector_monitor, max_r)
-        clutter_map = ClutterMap(world, loc.clutter_map) if loc.clutter_map.enabled else None
         return cls(
             world,
             sensor,
@@ -204,7 +167,7 @@ class LocalizationStack:
             map_aided=map_aided,
             use_ego=use_ego,
             monitor=monitor,
-            clutter_map=clutter_map,
+            clutter_map=ClutterMap(world, loc.clutter_map) if loc.clutter_map.enabled else None,
         )
 
     def spawn(self) -> LocalizationStack:
@@ -221,8 +184,7 @@ class LocalizationStack:
         new.converged = False
         if self.monitor is not None:
             new.monitor = replace(self.monitor)  # fresh statistics (see __post_init__)
-        if self.clutter_map is not None:
-            new.clutter_map = replace(self.clutter_map)  # no points (see __post_init__)
+        new.clutter_map = self.clutter_map and replace(self.clutter_map)  # no points yet
         return new
 
     # ------------------------------------------------------------------ per-robot state
@@ -246,8 +208,6 @@ class LocalizationStack:
             self.monitor.reset()
         if self.clutter_map is not None:
             self.clutter_map.reset()
-        self._anchor_pose = None
-        self._unconverged_frames = 0
 
     def set_radar_layout(self, layout: ReflectorLayout) -> None:
         """Let the radar see ``layout`` until the next :meth:`reset`; the map stays surveyed.
@@ -333,11 +293,6 @@ class LocalizationStack:
             detections = frame
             fingerprint, estimate = self._track_and_localize(frame, ego, rng)
         self.converged = bool(estimate.converged)
-        if estimate.converged:
-            self._anchor_pose, self._unconverged_frames = estimate.pose, 0
-        elif self._anchor_pose is not None:
-            self._anchor_pose = apply_odometry(self._anchor_pose, ego.odometry)
-            self._unconverged_frames += 1
         suspects = self._check_reflectors(estimate) if detections is not None else ()
         t1 = time.perf_counter()
         lut_estimate, pose_estimate = self._with_lut(fingerprint, estimate)
@@ -353,9 +308,8 @@ class LocalizationStack:
         if monitor is None:
             return ()
         gated = self.tracker.gated_fingerprint()
-        others = None
-        if self.clutter_map is not None and len(self.clutter_map.points):
-            others = self.clutter_map.predicted_m(estimate.pose[:2])
+        cmap = self.clutter_map  # its points' returns merge with a reflector's as another's do
+        others = None if cmap is None else cmap.predicted_m(estimate.pose[:2])
         if monitor.update(estimate, gated, others) and monitor.cfg.drop_suspects:
             key = monitor.suspects
             if key not in self._models:
@@ -398,8 +352,13 @@ class LocalizationStack:
             window = tracker.classifier.candidates(detections)  # one window test, used twice
             gated = tracker.gated_fingerprint(detections, window)
             weighed = self._declutter(gated, odometry)
-            weighed = weighed if weighed.count else None
-            estimate = loc.update(odometry, weighed, rng, recovery=own_fit, speed_mps=ego.speed_mps)
+            estimate = loc.update(
+                odometry,
+                weighed if weighed.count else None,
+                rng,
+                recovery=own_fit,
+                speed_mps=ego.speed_mps,
+            )
             # This frame's posterior; it ranks the tracks only once converged (right after a
             # global start its heaviest mode may be a mirror image).
             prior = None
@@ -425,28 +384,16 @@ class LocalizationStack:
             loc.update_recovery(
                 self._declutter(tracker.persistent_fingerprint(max_misses=0), odometry)
             )
+        if self.clutter_map is not None:  # after every use of the previous frame's pose
+            self.clutter_map.follow(estimate.pose, estimate.converged, odometry)
         return fingerprint, estimate
 
     def _declutter(self, fingerprint: Fingerprint, odometry: np.ndarray) -> Fingerprint:
-        """``fingerprint`` without the known clutter points' returns, predicted from the last
-        converged estimate moved by the odometry since (``odometry``: this frame's).
-
-        Also for a few frames after the cloud stopped being converged: that is when the
-        clutter does its harm (a cloud spread by recovery particles finds poses where the
-        clutter sits at reflector distances), while the odometry still knows the pose well.
-        """
+        """``fingerprint`` without the clutter map's returns (see ``ClutterMap.declutter``)."""
         cmap = self.clutter_map
-        anchor = self._anchor_pose
-        if cmap is None or not len(cmap.points) or anchor is None:
-            return fingerprint
-        if self._unconverged_frames > cmap.cfg.dead_reckoning_frames:
-            return fingerprint
-        xy = apply_odometry(anchor, odometry)[:2]
-        return cmap.without_clutter(fingerprint, xy)
+        return fingerprint if cmap is None else cmap.declutter(fingerprint, odometry)
 
-    def _learn_clutter(self, estimate: PoseEstimate, gated: Fingerprint) -> None:
-        """Let the clutter map learn from this frame's tracks, on a converged estimate."""
-        if self.clutter_map is None or not estimate.converged:
-            return
-        model = self.localizer.model
-        self.clutter_map.update(estimate.pose[:2], gated, model.map_return_ranges)
+    def _learn_clutter(self, est: PoseEstimate, gated: Fingerprint) -> None:
+        """The clutter map learns from this frame on a converged estimate."""
+        if (cmap := self.clutter_map) is not None and est.converged:
+            cmap.update(est.pose[:2], gated, self.localizer.model.map_return_ranges)

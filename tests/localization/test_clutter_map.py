@@ -148,7 +148,7 @@ def test_the_stack_learns_a_scatterer_and_keeps_it_out_of_amcl() -> None:
             d = float(np.linalg.norm(scatterer[0] - radar))
             if np.min(np.abs(world.true_distances_m(pose[:2]) - d)) > 0.15:
                 gated = stack.tracker.gated_fingerprint()
-                weighed = stack._declutter(gated, np.zeros(3))
+                weighed = stack.clutter_map.declutter(gated, np.zeros(3))
                 # Whether a distance within the radar's noise of the scatterer's is left,
                 # in what the tracker gated and in what the localiser then weighs.
                 before, after = (
