@@ -63,9 +63,13 @@ class ReflectorMonitorConfig(Strict):
 
 
 class ClutterMapConfig(Strict):
-    """Unmapped static scatterers learnt while localised (lrp_gym.localization.clutter_map)."""
+    """Unmapped static scatterers learnt while localised (lrp_gym.localization.clutter_map).
 
-    enabled: bool = True
+    Off by default: on the simulated clutter (docs/robustness.md) it gained nothing
+    measurable, and it costs about 6 % of a step.
+    """
+
+    enabled: bool = False
     gate_m: PositiveFloat = Field(
         default=0.1,
         description="a distance within this of a clutter point's predicted distance is its "

@@ -123,7 +123,11 @@ def test_the_stack_learns_a_scatterer_and_keeps_it_out_of_amcl() -> None:
     """The patrol, driven on its true trajectory with one unmapped scatterer as strong as a
     reflector: the stack's clutter map finds it, and once it has, the distances AMCL weighs
     no longer contain its return (unless a reflector's distance is the same)."""
-    cfg = build_config("ipin2023-patrol", radar_fidelity="detections")
+    cfg = build_config(
+        "ipin2023-patrol",
+        {"localization": {"clutter_map": {"enabled": True}}},
+        radar_fidelity="detections",
+    )
     world = World.from_config(cfg)
     stack = LocalizationStack.from_config(world, cfg)
     traj = path_trajectory(np.asarray(cfg.task.driven_path()), 1.5, cfg.task.frame_period_s)
