@@ -5,7 +5,7 @@ success, collision, steps, share of steps localised, confidently wrong steps (co
 off by > 0.3 m) and their longest stretch, the largest error, the reflectors named suspect
 (and the first frame) and where the robot and its estimate ended. ``--oracle-clutter-map``
 hands the localiser's clutter map the scatterers' true positions (and stops its learning):
-the yardstick of what a perfect clutter map could do.
+the yardstick of what a perfect clutter map could do (it switches the map on).
 
     python docs/scripts/cell_traces.py ipin2023-2types-patrol clutter 0.5 50 \
         ['{"localization": {"max_random_fraction": 0.0}}'] [--oracle-clutter-map]
@@ -78,6 +78,7 @@ def main(argv: list[str]) -> None:
     extra = json.loads(args[4]) if len(args) > 4 else {}
     if "--oracle-clutter-map" in flags:
         oracle_clutter_map()
+        extra = deep_merge(extra, {"localization": {"clutter_map": {"enabled": True}}})
     overrides = deep_merge(extra, cell_overrides(name, severity))
     env = make_eval_env("pure-pursuit", "LRPRadarNavFast-v0", scenario, overrides=overrides or None)
     policy = make_agent("pure-pursuit", env)

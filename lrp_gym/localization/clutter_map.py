@@ -7,17 +7,27 @@ drops (it reads the unexplained track as a kidnap and injects random particles),
 pose where the scatterer happens to sit at a reflector's distance can win the injected
 particles over. This is the landmark management of SLAM systems, kept small:
 
-- **learn**: on frames where the localiser vouches for its estimate, a fresh persistent track
-  whose distance no mapped reflector and no room return (structure, ghosts) explains adds one
-  observation (the radar's estimated position, the track's distance). Once a track has
-  ``min_observations`` of them, from positions that do not lie on one line, its point is
-  fitted by least squares (:func:`fit_point`) and kept when the distances agree with it;
+- **learn**: on frames where the localiser vouches for its estimate, the reflector-like
+  distances that no mapped reflector and no known point explains are buffered with the
+  estimate's position. Every few frames, triples of buffered frames give exact candidate
+  points (:func:`~lrp_gym.localization.point_fit.point_hypotheses`); the candidate with a
+  distance in most frames, seen from positions that do not lie on one line, is fitted by
+  least squares (:func:`~lrp_gym.localization.point_fit.fit_point`) and kept when the
+  distances agree with it and the model's room returns (structure, ghosts) do not already
+  predict them;
+- **refine**: each point takes its nearest distance of later frames and is refitted now and
+  then, from more of the path;
 - **use**: the distances within ``gate_m`` of a clutter point's predicted distance, and of no
   mapped reflector's, are taken out of what the localiser weighs and out of the recovery fit
-  (:meth:`ClutterMap.without_clutter`); the reflector monitor does not judge a reflector
-  whose return a clutter point's would merge with;
+  (:meth:`ClutterMap.declutter`), predicted from the last converged estimate moved by the
+  odometry; the reflector monitor does not judge a reflector whose return a clutter point's
+  would merge with;
 - **forget**: a point with no return near its predicted distance for ``forget_frames``
   localised frames (moved furniture, a person who stood still) is dropped.
+
+Off by default (``localization.clutter_map.enabled``): on the simulated clutter it gained
+nothing measurable (docs/robustness.md), because AMCL's clutter class already absorbs the
+scatterers' returns.
 
 Only the distance is modelled, not the height above or below the radar: from a radar moving
 in a plane, a point and its mirror image in that plane give the same distances.
