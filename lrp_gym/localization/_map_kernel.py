@@ -164,6 +164,12 @@ def map_return_density(
         if len(z) and _binned_jit is not None and bool(np.all(np.diff(z) >= 0.0)):
             return _binned_jit(*args, candidate_windows(z, half_inv), out)
         return _density_jit(*args, out)
+    return _density_numpy(z, half_inv, extra, weights, v, extra_v, doppler, with_v)
+
+
+def _density_numpy(z, half_inv, extra, weights, v, extra_v, doppler, with_v) -> np.ndarray:
+    """The numpy fallback of :func:`map_return_density`: every term, no cutoff."""
+    dtype = extra.dtype.type
     rs = extra[None, :, :] - np.asarray(z, dtype=dtype)[:, None, None]  # (n, K, N)
     rs *= rs
     rs *= np.asarray(half_inv, dtype=dtype)[:, None, None]

@@ -73,3 +73,17 @@ def wrap_fast(angle_rad: np.ndarray) -> np.ndarray:
     k *= 2.0 * np.pi
     angle_rad -= k
     return angle_rad
+
+
+#: Below this speed the Doppler of static returns carries no heading information.
+MIN_DOPPLER_SPEED_MPS = 0.05
+
+
+def particle_velocities(particles: np.ndarray, speed_mps: float | None) -> np.ndarray | None:
+    """Each particle's velocity (N, 2) at ``speed_mps`` along its heading (float32); None
+    when the speed is unknown or too small for the Doppler to say anything about the
+    heading."""
+    if speed_mps is None or abs(speed_mps) < MIN_DOPPLER_SPEED_MPS:
+        return None
+    th = particles[:, 2].astype(np.float32)
+    return speed_mps * np.column_stack([np.cos(th), np.sin(th)])
