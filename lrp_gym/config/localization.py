@@ -132,6 +132,12 @@ class LocalizationConfig(Strict):
     )
     lost_threshold_nats: PositiveFloat = 8.0
     lost_restart_nats: PositiveFloat = 20.0
+    lost_test_every: Annotated[int, Field(ge=1)] = Field(
+        default=1,
+        description="while the estimate is converged, the lost test quiet and no recovery "
+        "under way, evaluate the map-wide grid of the lost test only every this many frames "
+        "(it is the largest per-frame cost); 1: every frame",
+    )
     resample_ess_ratio: Fraction = 0.5
     alpha_slow: Fraction = 0.02
     alpha_fast: Fraction = 0.3

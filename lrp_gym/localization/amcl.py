@@ -27,13 +27,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from lrp_gym.config import LocalizationConfig, ScenarioError
+from lrp_gym.config import LocalizationConfig
 from lrp_gym.localization.kld import KldBinner, clamped_particle_count
 from lrp_gym.localization.likelihood import FingerprintModel, frame_fit
 from lrp_gym.localization.particle_motion import (
     odometry_noise,
     particle_velocities,
     sample_motion,
+    uniform_free_particles,
 )
 from lrp_gym.localization.particle_statistics import (
     cluster_labels,
@@ -91,6 +92,8 @@ class Amcl:
             )
         self.lost = self._new_lost_test()
         self._grid_loglik: np.ndarray | None = None
+        self._grid_frame: Fingerprint | None = None  # the frame of the lost test's grid
+        self._converged = False
         self._pending_global = False
         self.particles = np.zeros((0, 3))
         self.weights = np.zeros(0)
@@ -108,12 +111,17 @@ class Amcl:
         new = copy.copy(self)
         new.lost = self._new_lost_test()
         new.particles, new.weights = np.zeros((0, 3)), np.zeros(0)
-        new._predicted = new._grid_loglik = None
+        new._predicted = new._grid_loglik = new._grid_frame = None
         return new
 
     def _new_lost_test(self) -> LostTest:
         c = self.cfg
-        return LostTest(c.lost_drift_nats, c.lost_threshold_nats, c.lost_drift_per_distance_nats)
+        return LostTest(
+            c.lost_drift_nats,
+            c.lost_threshold_nats,
+            c.lost_drift_per_distance_nats,
+            every_frames=c.lost_test_every,
+        )
 
     # ------------------------------------------------------------------ sampling
     def _free(self, xy: np.ndarray) -> np.ndarray:
@@ -130,21 +138,7 @@ class Amcl:
 
     def uniform_particles(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """``n`` particles uniform over the free space (rejection sampling), headings uniform."""
-        out = np.empty((0, 2))
-        for _ in range(1000):
-            if len(out) >= n:
-                break
-            cand = rng.random((max(2 * (n - len(out)), 16), 2)) * self._size_xy
-            out = np.concatenate([out, cand[self._free(cand)]])
-        if len(out) < n:
-            raise ScenarioError(
-                [
-                    f"robot.radius_m: a robot of radius {self.clearance_m:g} m finds (almost) no "
-                    "free space between the walls and room.obstacles"
-                ]
-            )
-        th = rng.uniform(-np.pi, np.pi, n)
-        return np.column_stack([out[:n], th])
+        return uniform_free_particles(n, rng, self._size_xy, self._free, self.clearance_m)
 
     def reset(self, rng: np.random.Generator, pose: np.ndarray | None = None) -> None:
         """Start from the uniform prior, or from a Gaussian around ``pose``.
@@ -172,7 +166,7 @@ class Amcl:
         self._n_fits = 0  # fits averaged since reset: the first one sets both averages
         self._predicted = None
         self.lost.reset()
-        self._grid_loglik = None
+        self._grid_loglik, self._grid_frame, self._converged = None, None, False
         # A uniform prior is drawn from the first frame's likelihood (sensor-based start).
         self._pending_global = bool(
             self.global_proposal and self.cfg.init == "uniform" and pose is None
@@ -215,6 +209,7 @@ class Amcl:
         self.weights = w / total
         ess = effective_sample_size(self.weights)
         estimate = self._estimate(ess)
+        self._converged = estimate.converged
         n = len(self.weights)
         self.n_injected = 0
         # The lost test asks for recovery particles too, once past its threshold.
@@ -239,7 +234,9 @@ class Amcl:
         vel = particle_velocities(self.particles, speed_mps)
         xy = self.particles[:, :2]
         returns = None if self._pending_global else self.model.map_returns_at(xy, fingerprint, vel)
-        if self.global_proposal:
+        self._grid_loglik, self._grid_frame = None, fingerprint  # the grid: lazily for recovery
+        quiet = self._converged and self.p_random == 0.0  # (lost_test_every: skip the test)
+        if self.global_proposal and (self._pending_global or self.lost.due(quiet)):
             grid_ll = self.grid.log_likelihood(self.model, fingerprint)
             self._grid_loglik = grid_ll
             if not self._pending_global:
@@ -355,6 +352,8 @@ class Amcl:
     def _injected(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """Recovery particles: drawn from the last frame's likelihood grid (sensor resetting)
         when there is one, else uniform; headings uniform."""
+        if self._grid_loglik is None and self._grid_frame is not None and self.global_proposal:
+            self._grid_loglik = self.grid.log_likelihood(self.model, self._grid_frame)
         if self._grid_loglik is None:
             return self.uniform_particles(n, rng)
         xy, _ = self.grid.draw(self._grid_loglik, n, rng)

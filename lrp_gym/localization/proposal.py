@@ -108,6 +108,10 @@ class LostTest:
     drift_per_distance_nats : float
         The same per measured distance: the chance fit grows with the number of distances
         weighed, so a frame's drift is ``max(drift_nats, drift_per_distance_nats * count)``.
+    every_frames : int
+        While quiet, the test runs on one frame in this many (:meth:`due`).
+    frames_skipped : int
+        Frames skipped since the test last ran.
     threshold_nats : float
         Statistic at which the cloud counts as lost (probability 1/2).
     statistic_nats : float
@@ -121,10 +125,23 @@ class LostTest:
     drift_per_distance_nats: float = 0.0
     statistic_nats: float = 0.0
     last_deficit_nats: float = 0.0
+    every_frames: int = 1
+    frames_skipped: int = 0
 
     def reset(self) -> None:
         self.statistic_nats = 0.0
         self.last_deficit_nats = 0.0
+        self.frames_skipped = 0
+
+    def due(self, quiet: bool) -> bool:
+        """Whether to run the test in this frame: always unless ``quiet`` (the filter has
+        converged and nothing is amiss), then every :attr:`every_frames` frames while the
+        statistic is 0."""
+        if quiet and self.statistic_nats == 0.0 and self.frames_skipped + 1 < self.every_frames:
+            self.frames_skipped += 1
+            return False
+        self.frames_skipped = 0
+        return True
 
     def update(
         self,
