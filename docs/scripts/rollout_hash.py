@@ -19,6 +19,7 @@ import hashlib
 
 import gymnasium as gym
 import numpy as np
+import yaml
 
 import lrp_gym  # noqa: F401  (registers the ids)
 
@@ -29,9 +30,22 @@ CASES = (
 )
 
 
-def rollout_hash(env_id: str, scenario: str, steps: int, seed: int) -> str:
+def _overrides(sets: list[str]) -> dict:
+    """``KEY.PATH=VALUE`` settings (values read as YAML) as a nested dict, on the goal task."""
+    out: dict = {"task": {"mode": "goal"}}
+    for item in sets:
+        path, value = item.split("=", 1)
+        *parents, leaf = path.split(".")
+        node = out
+        for key in parents:
+            node = node.setdefault(key, {})
+        node[leaf] = yaml.safe_load(value)
+    return out
+
+
+def rollout_hash(env_id: str, scenario: str, steps: int, seed: int, sets: list[str]) -> str:
     """SHA-256 over every step's observation, reward, flags, poses and particle count."""
-    env = gym.make(env_id, scenario=scenario, overrides={"task": {"mode": "goal"}})
+    env = gym.make(env_id, scenario=scenario, overrides=_overrides(sets))
     rng = np.random.default_rng(seed)
     h = hashlib.sha256()
     obs, info = env.reset(seed=seed)
@@ -57,9 +71,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=300)
     parser.add_argument("--seed", type=int, default=11)
+    parser.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE")
     args = parser.parse_args()
     for env_id, scenario in CASES:
-        print(env_id, scenario, rollout_hash(env_id, scenario, args.steps, args.seed), flush=True)
+        digest = rollout_hash(env_id, scenario, args.steps, args.seed, args.set)
+        print(env_id, scenario, digest, flush=True)
 
 
 if __name__ == "__main__":

@@ -305,6 +305,7 @@ class FingerprintModel:
         velocity_xy: np.ndarray | None = None,
         map_ranges: np.ndarray | None = None,
         map_rates: np.ndarray | None = None,
+        expected: list[np.ndarray] | None = None,
     ) -> np.ndarray:
         """Log-likelihood (N,) float64 of ``fingerprint`` at each position of ``xy`` (N, 2).
 
@@ -317,7 +318,9 @@ class FingerprintModel:
         ``map_ranges``, :meth:`map_return_ranges` of ``xy``, saves recomputing them where the
         Doppler term does not apply; where it does, they are used only together with
         ``map_rates``, their radial velocities at ``velocity_xy`` (:meth:`map_returns_at`),
-        and computed with their velocities otherwise.
+        and computed with their velocities otherwise. ``expected``, :meth:`expected` of ``xy``
+        in ``dtype``, likewise saves recomputing the reflectors' ranges where the Doppler term
+        does not apply (it is ignored where it does).
         """
         doppler = (
             velocity_xy is not None
@@ -331,7 +334,8 @@ class FingerprintModel:
         given = None
         if map_ranges is not None and (vel is None or map_rates is not None):
             given = (map_ranges, None if vel is None else map_rates)
-        return log_likelihood_terms(self, xy, segments, vel, given, dtype)
+        expected = expected if vel is None else None
+        return log_likelihood_terms(self, xy, segments, vel, given, dtype, expected)
 
     def distance_fits(
         self, xy: np.ndarray, weights: np.ndarray, fingerprint: Fingerprint

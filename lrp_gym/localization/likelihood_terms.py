@@ -75,12 +75,15 @@ def log_likelihood_terms(
     velocity_xy: np.ndarray | None,
     map_returns: tuple[np.ndarray, np.ndarray | None] | None,
     dtype,
+    expected: list[np.ndarray] | None = None,
 ) -> np.ndarray:
     """Log-likelihood (N,) of the ``segments`` of a fingerprint at positions ``xy`` (N, 2);
     ``velocity_xy`` is None unless the Doppler term applies. ``map_returns``, if given, are
     the map's predicted ranges (K, N) at ``xy`` and, iff ``velocity_xy`` is given, their
-    radial velocities."""
+    radial velocities; ``expected``, if given, the reflectors' sorted ranges at ``xy`` (the
+    Doppler term aside)."""
     frame = _Frame(model, xy, velocity_xy, map_returns, dtype)
+    frame.expected = expected
     out = np.zeros(xy.shape[0])
     for seg in segments:
         out += _segment_term(frame, seg)

@@ -57,6 +57,7 @@ class MeasurementGrid:
         self._free = free
         self._map_model: FingerprintModel | None = None
         self._map_ranges: list[np.ndarray | None] = []
+        self._expected: list[list[np.ndarray]] = []
 
     def __len__(self) -> int:
         return len(self.centres_m)
@@ -67,13 +68,15 @@ class MeasurementGrid:
         xy = self.centres_m
         chunks = range(0, len(xy), _CHUNK)
         if self._map_model is not model:
-            # The cells do not move: the map's predicted returns there are computed once.
+            # The cells do not move: the map's predicted returns and the reflectors' ranges
+            # there are computed once per model.
             self._map_model = model
             self._map_ranges = [model.map_return_ranges(xy[i : i + _CHUNK]) for i in chunks]
+            self._expected = [model.expected(xy[i : i + _CHUNK], np.float32) for i in chunks]
         return np.concatenate(
             [
-                model.log_likelihood(xy[i : i + _CHUNK], fingerprint, map_ranges=ranges)
-                for i, ranges in zip(chunks, self._map_ranges, strict=True)
+                model.log_likelihood(xy[i : i + _CHUNK], fingerprint, map_ranges=r, expected=e)
+                for i, r, e in zip(chunks, self._map_ranges, self._expected, strict=True)
             ]
             or [np.zeros(0)]
         )

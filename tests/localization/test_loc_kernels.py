@@ -6,6 +6,8 @@ values bit for bit, so that trajectories stay identical.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -13,6 +15,7 @@ from lrp_gym.config import load_scenario
 from lrp_gym.localization import _map_kernel as mk
 from lrp_gym.localization.ghosts import GhostModel
 from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.localization.proposal import MeasurementGrid
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world import World
 
@@ -143,3 +146,20 @@ def test_given_map_returns_give_the_same_likelihood_as_computed_ones():
         model.log_likelihood(xy, fp, velocity_xy=vel, map_ranges=ranges + 1.0),
         model.log_likelihood(xy, fp, velocity_xy=vel),
     )
+
+
+def test_measurement_grid_caches_give_the_likelihood_computed_from_scratch():
+    """The lost test's grid keeps the map's returns and the reflectors' ranges at its fixed
+    cells: the frame's log-likelihood there is the one computed from scratch."""
+    cfg = load_scenario("ipin2023-2types")
+    world = World.from_config(cfg)
+    model = FingerprintModel.for_world(world, cfg.localization)
+    amcl_grid = MeasurementGrid(np.array([5.0, 5.0]), 0.1, lambda xy: np.ones(len(xy), bool))
+    rng = np.random.default_rng(8)
+    for _ in range(3):
+        true = world.radar_position(rng.uniform(0.5, 4.5, 2))
+        fp = Fingerprint.from_true(world.layout, true)
+        fp = replace(fp, distances_m=tuple(d + rng.normal(0, 0.02, len(d)) for d in fp.distances_m))
+        np.testing.assert_array_equal(
+            amcl_grid.log_likelihood(model, fp), model.log_likelihood(amcl_grid.centres_m, fp)
+        )

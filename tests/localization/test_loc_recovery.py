@@ -15,6 +15,7 @@ from lrp_gym.config import load_scenario
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.particle_statistics import dominant_cluster
+from lrp_gym.localization.proposal import LostTest, MeasurementGrid
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world import World
 from lrp_gym.world.robot import odometry_delta
@@ -240,3 +241,35 @@ def test_recovery_scored_later_on_another_fingerprint_equals_in_update(room):
                 assert (amcl.w_fast, amcl.w_slow) != before  # the deferred call scored it
         stats.append((amcl.w_fast, amcl.w_slow, amcl.p_random))
     np.testing.assert_allclose(stats[0], stats[1])
+
+
+def test_lost_test_schedule_skips_only_quiet_frames():
+    """``lost_test_every``: while quiet, one frame in k runs the test; any other frame does."""
+    test = LostTest(every_frames=3)
+    assert [test.due(True) for _ in range(6)] == [False, False, True, False, False, True]
+    assert test.due(True) is False
+    assert test.due(False) is True  # not quiet: the test runs and the count restarts
+    assert [test.due(True) for _ in range(3)] == [False, False, True]
+    test.statistic_nats = 1.0  # evidence building up: every frame
+    assert all(test.due(True) for _ in range(4))
+    assert all(LostTest(every_frames=1).due(True) for _ in range(4))
+
+
+def test_kidnap_recovery_with_the_lost_test_every_8_frames(room, monkeypatch):
+    """With the grid skipped on quiet frames the filter evaluates it far less often and still
+    recovers from the kidnaps of :func:`test_recovers_from_kidnapping_within_15_frames`."""
+    world, loc = room
+    calls = []
+    grid_ll = MeasurementGrid.log_likelihood
+    monkeypatch.setattr(
+        MeasurementGrid, "log_likelihood", lambda g, *a: calls.append(1) or grid_ll(g, *a)
+    )
+    sparse = loc.model_copy(update={"lost_test_every": 8})
+    recovered, frames = [], 0
+    for seed in range(10):
+        errors, _ = _drive(world, sparse, seed, KIDNAP_FRAME + 20, kidnap=True)
+        after = errors[KIDNAP_FRAME:]
+        recovered.append(np.all(after[15:] < 0.2) and np.any(after[:16] < 0.2))
+        frames += len(errors)
+    assert np.mean(recovered) >= 0.9, recovered
+    assert len(calls) < 0.6 * frames  # (every frame: at least one call per frame)
