@@ -235,12 +235,17 @@ class Amcl:
         xy = self.particles[:, :2]
         returns = None if self._pending_global else self.model.map_returns_at(xy, fingerprint, vel)
         self._grid_loglik, self._grid_frame = None, fingerprint  # the grid: lazily for recovery
-        quiet = self._converged and self.p_random == 0.0  # (lost_test_every: skip the test)
-        if self.global_proposal and (self._pending_global or self.lost.due(quiet)):
-            grid_ll = self.grid.log_likelihood(self.model, fingerprint)
-            self._grid_loglik = grid_ll
-            if not self._pending_global:
-                self._test_lost(fingerprint, w, grid_ll, returns)
+        if self.global_proposal and self._pending_global:
+            self._grid_loglik = self.grid.log_likelihood(self.model, fingerprint)
+        elif self.global_proposal:
+            # lost_test_every > 1: the test (and its grid) may skip quiet frames
+            marginal = self._cloud_marginal(fingerprint, w, returns)
+            quiet = self._converged and self.p_random == 0.0
+            if self.lost.due(quiet, marginal, fingerprint.count):
+                self._grid_loglik = self.grid.log_likelihood(self.model, fingerprint)
+                best = float(np.max(self._grid_loglik))
+                self.lost.update_marginal(best, marginal, fingerprint.count)
+                self._pending_global = self.lost.statistic_nats >= self.cfg.lost_restart_nats
         if self._pending_global:
             return self._global_start(fingerprint, rng, speed_mps)
         if recovery:
@@ -283,26 +288,16 @@ class Amcl:
         log_w = (loglik - cell_ll[cells]) * self.cfg.likelihood_exponent
         return np.exp(log_w - np.max(log_w))
 
-    def _test_lost(
-        self,
-        fingerprint: Fingerprint,
-        prior_weights: np.ndarray,
-        grid_loglik: np.ndarray,
-        returns: tuple[np.ndarray, np.ndarray | None] | None,
-    ) -> None:
-        """Feed the lost test with this frame (heading-free, on a subsample of the predicted
-        cloud, against ``grid_loglik``, the frame's log-likelihood on the measurement grid); a
-        statistic far past the threshold restarts global localisation. ``returns``: the map's
-        predicted returns at all the particles (their ranges are sliced), or None."""
+    def _cloud_marginal(
+        self, fingerprint: Fingerprint, prior_weights: np.ndarray, returns
+    ) -> float | None:
+        """The lost test's marginal log-likelihood of the predicted cloud (heading-free, on a
+        subsample; ``returns``, the map's returns at all the particles, are sliced)."""
         stride = max(1, len(prior_weights) // _FIT_SAMPLE)
         sub = self.particles[::stride, :2]
         ranges = None if returns is None else np.ascontiguousarray(returns[0][:, ::stride])
         cloud_ll = self.model.log_likelihood(sub, fingerprint, map_ranges=ranges)
-        self.lost.update(
-            float(np.max(grid_loglik)), cloud_ll, prior_weights[::stride], fingerprint.count
-        )
-        if self.lost.statistic_nats >= self.cfg.lost_restart_nats:
-            self._pending_global = True
+        return self.lost.marginal(cloud_ll, prior_weights[::stride])
 
     def update_recovery(self, fingerprint: Fingerprint) -> None:
         """Score the last update's predicted cloud on ``fingerprint`` (see ``recovery``)."""

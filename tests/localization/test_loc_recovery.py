@@ -244,19 +244,27 @@ def test_recovery_scored_later_on_another_fingerprint_equals_in_update(room):
 
 
 def test_lost_test_schedule_skips_only_quiet_frames():
-    """``lost_test_every``: while quiet, one frame in k runs the test; any other frame does."""
-    test = LostTest(every_frames=3)
-    assert [test.due(True) for _ in range(6)] == [False, False, True, False, False, True]
-    assert test.due(True) is False
-    assert test.due(False) is True  # not quiet: the test runs and the count restarts
-    assert [test.due(True) for _ in range(3)] == [False, False, True]
+    """``lost_test_every``: a frame skips the test only while quiet, with the statistic at 0
+    and the cloud's marginal close to the last best cell, and at most k - 1 frames in a row."""
+    test = LostTest(drift_nats=4.0, every_frames=3)
+    assert test.due(True, -10.0) is True  # no grid evaluated yet
+    test.update_marginal(-10.0, -10.5, 0)  # deficit 0.5 < drift: the statistic stays 0
+    assert test.statistic_nats == 0.0
+    assert [test.due(True, -10.5) for _ in range(6)] == [False, False, True] * 2
+    assert test.due(False, -10.5) is True  # not quiet: the test runs and the count restarts
+    assert test.due(True, -10.5) is False
+    assert test.due(True, -10.0 - 4.0 + 1.0) is True  # within the margin of the drift: runs
+    assert test.due(True, -30.0) is True  # the cloud's likelihood drops (a kidnap): runs
+    assert test.due(True, None) is True
     test.statistic_nats = 1.0  # evidence building up: every frame
-    assert all(test.due(True) for _ in range(4))
-    assert all(LostTest(every_frames=1).due(True) for _ in range(4))
+    assert all(test.due(True, -10.5) for _ in range(4))
+    every = LostTest(every_frames=1)
+    every.update_marginal(-10.0, -10.5, 0)
+    assert all(every.due(True, -10.5) for _ in range(4))
 
 
 def test_kidnap_recovery_with_the_lost_test_every_8_frames(room, monkeypatch):
-    """With the grid skipped on quiet frames the filter evaluates it far less often and still
+    """With the grid skipped on quiet frames the filter evaluates it less often and still
     recovers from the kidnaps of :func:`test_recovers_from_kidnapping_within_15_frames`."""
     world, loc = room
     calls = []
