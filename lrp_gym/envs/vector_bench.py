@@ -3,7 +3,9 @@
 ``lrp-gym bench -c vector``: for each radar fidelity, the single env and the vector env with
 N robots, on the default task (sampled goals, autoreset included), driven with the same
 random action stream, timed after ``WARMUP_STEPS`` steps. Figures are per core (the bench pins itself to one); the ratio
-``speedup_vs_single`` is what the batching buys, measured within one run.
+``speedup_vs_single`` is what the batching buys, measured within one run. Each rate is also
+given per CPU second of the process (``*_per_cpu_s``, ``speedup_vs_single_cpu``): on a shared
+machine the wall-clock rates move with the other processes' load, the CPU rates much less.
 """
 
 from __future__ import annotations
@@ -33,19 +35,20 @@ def _actions(rng: np.random.Generator, n: int) -> np.ndarray:
     return np.column_stack([rng.uniform(0.2, 0.8, n), rng.uniform(-0.4, 0.4, n)])
 
 
-def single_env_steps_per_s(cfg: ScenarioConfig, seconds: float) -> float:
+def single_env_steps_per_s(cfg: ScenarioConfig, seconds: float) -> tuple[float, float]:
+    """Steps per wall second and per CPU second of the single env."""
     env = gym.make("LRPRadarNav-v0", scenario=cfg).unwrapped
     rng = np.random.default_rng(0)
     env.reset(seed=0)
     for _ in range(WARMUP_STEPS):
         env.step(_actions(rng, 1)[0])
-    steps, t0 = 0, time.perf_counter()
+    steps, t0, c0 = 0, time.perf_counter(), time.process_time()
     while time.perf_counter() - t0 < seconds or steps < MIN_STEPS:
         _, _, terminated, truncated, _ = env.step(_actions(rng, 1)[0])
         steps += 1
         if terminated or truncated:
             env.reset()
-    return steps / (time.perf_counter() - t0)
+    return steps / (time.perf_counter() - t0), steps / (time.process_time() - c0)
 
 
 def vector_env_figures(cfg: ScenarioConfig, num_envs: int, seconds: float) -> dict:
@@ -56,7 +59,7 @@ def vector_env_figures(cfg: ScenarioConfig, num_envs: int, seconds: float) -> di
     for _ in range(WARMUP_STEPS):
         venv.step(_actions(rng, num_envs))
     stage_s = dict.fromkeys(_STAGES, 0.0)
-    steps, t0 = 0, time.perf_counter()
+    steps, t0, c0 = 0, time.perf_counter(), time.process_time()
     while time.perf_counter() - t0 < seconds or steps < MIN_STEPS:
         venv.step(_actions(rng, num_envs))
         steps += 1
@@ -64,11 +67,12 @@ def vector_env_figures(cfg: ScenarioConfig, num_envs: int, seconds: float) -> di
             if frame is not None:
                 for k in _STAGES:
                     stage_s[k] += frame.elapsed_s.get(k, 0.0)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     venv.close()
     split = {f"{k}_share": v / wall for k, v in stage_s.items()}
     split["task_and_glue_share"] = max(0.0, 1.0 - sum(split.values()))
-    return {"steps_per_s": steps * num_envs / wall, "batch_steps": steps, **split}
+    rates = {"steps_per_s": steps * num_envs / wall, "steps_per_cpu_s": steps * num_envs / cpu}
+    return {**rates, "batch_steps": steps, **split}
 
 
 def bench_vector(cfg: ScenarioConfig, seconds: float, batch_sizes=BATCH_SIZES) -> dict:
@@ -76,11 +80,12 @@ def bench_vector(cfg: ScenarioConfig, seconds: float, batch_sizes=BATCH_SIZES) -
     out: dict = {}
     for fidelity in FIDELITIES:
         fcfg = cfg.with_overrides({"radar": {"fidelity": fidelity}, "task": {"mode": "goal"}})
-        single = single_env_steps_per_s(fcfg, seconds)
-        rows: dict = {"single_env_steps_per_s": single}
+        single, single_cpu = single_env_steps_per_s(fcfg, seconds)
+        rows: dict = {"single_env_steps_per_s": single, "single_env_steps_per_cpu_s": single_cpu}
         for n in batch_sizes:
             fig = vector_env_figures(fcfg, n, seconds)
             fig["speedup_vs_single"] = fig["steps_per_s"] / single
+            fig["speedup_vs_single_cpu"] = fig["steps_per_cpu_s"] / single_cpu
             rows[f"N={n}"] = fig
         out[fidelity] = rows
     # ru_maxrss is in kB on Linux: the peak of the whole run, largest batch included.

@@ -13,11 +13,7 @@ One :meth:`Amcl.update` per radar frame:
    particles given by the ``alpha_slow`` / ``alpha_fast`` averages of the measurement
    likelihood (Augmented MCL, Thrun et al., ch. 8.3.5).
 
-The KLD count is computed vectorised rather than incrementally: the ``k`` occupied bins are
-counted on a systematic resample of the current size ``N``, and the new size is
-``n_chi(k)`` clamped to ``[min_particles, max_particles]``. Because ``k`` can only grow with
-the sample size, this never asks for fewer particles than Fox's incremental rule on the same
-draw would when the population shrinks; it adapts one resampling step later when it grows.
+The KLD count is computed vectorised rather than incrementally (:mod:`~lrp_gym.localization.kld`).
 
 If every particle ends with weight zero (all left the free space, or the likelihood
 underflowed with ``clutter_probability = 0``), the filter re-initialises uniformly: a global
@@ -31,10 +27,15 @@ from dataclasses import replace
 
 import numpy as np
 
-from lrp_gym.config import LocalizationConfig, ScenarioError
-from lrp_gym.localization.kld import KldBinner, kld_particle_count
+from lrp_gym.config import LocalizationConfig
+from lrp_gym.localization.kld import KldBinner, clamped_particle_count
 from lrp_gym.localization.likelihood import FingerprintModel, frame_fit
-from lrp_gym.localization.particle_motion import odometry_noise, sample_motion
+from lrp_gym.localization.particle_motion import (
+    odometry_noise,
+    particle_velocities,
+    sample_motion,
+    uniform_free_particles,
+)
 from lrp_gym.localization.particle_statistics import (
     cluster_labels,
 )
@@ -45,14 +46,12 @@ from lrp_gym.localization.resampling import (
     mode_preserving_resample,
     systematic_resample,
 )
-from lrp_gym.localization.slip import SlipMonitor
+from lrp_gym.localization.slip import slip_monitor
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
 
 #: Particles on which the recovery's measurement fit is evaluated (a strided subsample).
 _FIT_SAMPLE = 256
-#: Below this speed the Doppler of static returns carries no heading information.
-_MIN_DOPPLER_SPEED_MPS = 0.05
 #: Bins lighter than this share of the weight belong to no mode when resampling.
 _MODE_BIN_MASS = 1e-5
 
@@ -80,9 +79,7 @@ class Amcl:
         self.cfg = cfg
         self.model = FingerprintModel.for_world(world, cfg)
         self.motion_noise = odometry_noise(cfg)
-        self.slip = (
-            SlipMonitor(self.motion_noise, cfg.slip_max_inflation) if cfg.slip_adaptive else None
-        )
+        self.slip = slip_monitor(self.motion_noise, cfg)
         self.clearance_m = float(world.robot.radius_m)
         self._size_xy = np.asarray(world.room.size_m[:2], dtype=float)
         self._simple_room = not world.room.obstacles
@@ -97,6 +94,8 @@ class Amcl:
             )
         self.lost = self._new_lost_test()
         self._grid_loglik: np.ndarray | None = None
+        self._grid_frame: Fingerprint | None = None  # the frame of the lost test's grid
+        self._converged = False
         self._pending_global = False
         self.particles = np.zeros((0, 3))
         self.weights = np.zeros(0)
@@ -113,15 +112,19 @@ class Amcl:
         weights and lost test (call :meth:`reset` before use)."""
         new = copy.copy(self)
         new.lost = self._new_lost_test()
-        if self.slip is not None:
-            new.slip = SlipMonitor(self.motion_noise, self.cfg.slip_max_inflation)
+        new.slip = slip_monitor(self.motion_noise, self.cfg)
         new.particles, new.weights = np.zeros((0, 3)), np.zeros(0)
-        new._predicted = new._grid_loglik = None
+        new._predicted = new._grid_loglik = new._grid_frame = None
         return new
 
     def _new_lost_test(self) -> LostTest:
         c = self.cfg
-        return LostTest(c.lost_drift_nats, c.lost_threshold_nats, c.lost_drift_per_distance_nats)
+        return LostTest(
+            c.lost_drift_nats,
+            c.lost_threshold_nats,
+            c.lost_drift_per_distance_nats,
+            every_frames=c.lost_test_every,
+        )
 
     # ------------------------------------------------------------------ sampling
     def _free(self, xy: np.ndarray) -> np.ndarray:
@@ -138,21 +141,7 @@ class Amcl:
 
     def uniform_particles(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """``n`` particles uniform over the free space (rejection sampling), headings uniform."""
-        out = np.empty((0, 2))
-        for _ in range(1000):
-            if len(out) >= n:
-                break
-            cand = rng.random((max(2 * (n - len(out)), 16), 2)) * self._size_xy
-            out = np.concatenate([out, cand[self._free(cand)]])
-        if len(out) < n:
-            raise ScenarioError(
-                [
-                    f"robot.radius_m: a robot of radius {self.clearance_m:g} m finds (almost) no "
-                    "free space between the walls and room.obstacles"
-                ]
-            )
-        th = rng.uniform(-np.pi, np.pi, n)
-        return np.column_stack([out[:n], th])
+        return uniform_free_particles(n, rng, self._size_xy, self._free, self.clearance_m)
 
     def reset(self, rng: np.random.Generator, pose: np.ndarray | None = None) -> None:
         """Start from the uniform prior, or from a Gaussian around ``pose``.
@@ -182,7 +171,7 @@ class Amcl:
         self.lost.reset()
         if self.slip is not None:
             self.slip.reset()
-        self._grid_loglik = None
+        self._grid_loglik, self._grid_frame, self._converged = None, None, False
         # A uniform prior is drawn from the first frame's likelihood (sensor-based start).
         self._pending_global = bool(
             self.global_proposal and self.cfg.init == "uniform" and pose is None
@@ -217,17 +206,7 @@ class Amcl:
         w = self.weights * self._free(self.particles[:, :2])
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
-            if self.global_proposal:
-                grid_ll = self.grid.log_likelihood(self.model, fingerprint)
-                self._grid_loglik = grid_ll
-                if not self._pending_global:
-                    self._test_lost(fingerprint, w, grid_ll)
-            if self._pending_global:
-                w = self._global_start(fingerprint, rng, speed_mps)
-            else:
-                if recovery:
-                    self._update_recovery(self.particles, w, fingerprint)
-                w = w * self._likelihood(fingerprint, w, speed_mps)
+            w = self._weigh(fingerprint, w, rng, recovery, speed_mps)
         total = float(np.sum(w))
         if not (total > 0.0 and np.isfinite(total)):
             self.particles = self.uniform_particles(len(self.particles), rng)
@@ -236,6 +215,7 @@ class Amcl:
         self.weights = w / total
         ess = effective_sample_size(self.weights)
         estimate = self._estimate(ess)
+        self._converged = estimate.converged
         if self.slip is not None:
             self.slip.update(odometry, estimate.pose, estimate.converged)
         n = len(self.weights)
@@ -248,12 +228,47 @@ class Amcl:
             self._resample(rng)
         return replace(estimate, n_particles=len(self.particles))
 
-    def _likelihood(
-        self, fingerprint: Fingerprint, weights: np.ndarray, speed_mps: float | None
+    def _weigh(
+        self,
+        fingerprint: Fingerprint,
+        w: np.ndarray,
+        rng: np.random.Generator,
+        recovery: bool,
+        speed_mps: float | None,
     ) -> np.ndarray:
-        """Measurement likelihood (N,) of the particles, scaled so the best live one is 1."""
+        """The lost test, then the predicted particles' weights ``w`` times the likelihood of
+        ``fingerprint`` (or the importance weights of a global start)."""
+        # The map's returns at the particles, once for the lost test and the weighting.
+        vel = particle_velocities(self.particles, speed_mps)
+        xy = self.particles[:, :2]
+        returns = None if self._pending_global else self.model.map_returns_at(xy, fingerprint, vel)
+        self._grid_loglik, self._grid_frame = None, fingerprint  # the grid: lazily for recovery
+        if self.global_proposal and self._pending_global:
+            self._grid_loglik = self.grid.log_likelihood(self.model, fingerprint)
+        elif self.global_proposal:
+            # lost_test_every > 1: the test (and its grid) may skip quiet frames
+            marginal = self._cloud_marginal(fingerprint, w, returns)
+            quiet = self._converged and self.p_random == 0.0
+            if self.lost.due(quiet, marginal, fingerprint.count):
+                self._grid_loglik = self.grid.log_likelihood(self.model, fingerprint)
+                best = float(np.max(self._grid_loglik))
+                self.lost.update_marginal(best, marginal, fingerprint.count)
+                self._pending_global = self.lost.statistic_nats >= self.cfg.lost_restart_nats
+        if self._pending_global:
+            return self._global_start(fingerprint, rng, speed_mps)
+        if recovery:
+            self._update_recovery(self.particles, w, fingerprint)
+        return w * self._likelihood(fingerprint, w, vel, returns)
+
+    def _likelihood(
+        self, fingerprint: Fingerprint, weights: np.ndarray, vel, returns
+    ) -> np.ndarray:
+        """Measurement likelihood (N,) of the particles, scaled so the best live one is 1
+        (``vel`` from :func:`particle_velocities`, ``returns`` from
+        :meth:`FingerprintModel.map_returns_at` at the particles, or None)."""
+        ranges, rates = (None, None) if returns is None else returns
         loglik = self.model.log_likelihood(
-            self.particles, fingerprint, velocity_xy=self._velocities(speed_mps)
+            self.particles, fingerprint, velocity_xy=vel, map_ranges=ranges, map_rates=rates
         )
         # Tempering: the frames' errors are correlated (multipath persists while the robot
         # moves a few cm), so a product over frames would count the same evidence repeatedly.
@@ -276,33 +291,21 @@ class Amcl:
         xy, cells = self.start_grid.draw(cell_ll * self.cfg.likelihood_exponent, n, rng)
         self.particles = np.column_stack([xy, rng.uniform(-np.pi, np.pi, n)])
         loglik = self.model.log_likelihood(
-            self.particles, fingerprint, velocity_xy=self._velocities(speed_mps)
+            self.particles, fingerprint, velocity_xy=particle_velocities(self.particles, speed_mps)
         )
         log_w = (loglik - cell_ll[cells]) * self.cfg.likelihood_exponent
         return np.exp(log_w - np.max(log_w))
 
-    def _test_lost(
-        self, fingerprint: Fingerprint, prior_weights: np.ndarray, grid_loglik: np.ndarray
-    ) -> None:
-        """Feed the lost test with this frame (heading-free, on a subsample of the predicted
-        cloud, against ``grid_loglik``, the frame's log-likelihood on the measurement grid); a
-        statistic far past the threshold restarts global localisation."""
+    def _cloud_marginal(
+        self, fingerprint: Fingerprint, prior_weights: np.ndarray, returns
+    ) -> float | None:
+        """The lost test's marginal log-likelihood of the predicted cloud (heading-free, on a
+        subsample; ``returns``, the map's returns at all the particles, are sliced)."""
         stride = max(1, len(prior_weights) // _FIT_SAMPLE)
         sub = self.particles[::stride, :2]
-        cloud_ll = self.model.log_likelihood(sub, fingerprint)
-        self.lost.update(
-            float(np.max(grid_loglik)), cloud_ll, prior_weights[::stride], fingerprint.count
-        )
-        if self.lost.statistic_nats >= self.cfg.lost_restart_nats:
-            self._pending_global = True
-
-    def _velocities(self, speed_mps: float | None) -> np.ndarray | None:
-        """Each particle's velocity (N, 2) at ``speed_mps`` along its heading; None when the
-        speed is unknown or too small for the Doppler to say anything about the heading."""
-        if speed_mps is None or abs(speed_mps) < _MIN_DOPPLER_SPEED_MPS:
-            return None
-        th = self.particles[:, 2].astype(np.float32)
-        return speed_mps * np.column_stack([np.cos(th), np.sin(th)])
+        ranges = None if returns is None else np.ascontiguousarray(returns[0][:, ::stride])
+        cloud_ll = self.model.log_likelihood(sub, fingerprint, map_ranges=ranges)
+        return self.lost.marginal(cloud_ll, prior_weights[::stride])
 
     def update_recovery(self, fingerprint: Fingerprint) -> None:
         """Score the last update's predicted cloud on ``fingerprint`` (see ``recovery``)."""
@@ -352,26 +355,25 @@ class Amcl:
     def _injected(self, n: int, rng: np.random.Generator) -> np.ndarray:
         """Recovery particles: drawn from the last frame's likelihood grid (sensor resetting)
         when there is one, else uniform; headings uniform."""
+        if self._grid_loglik is None and self._grid_frame is not None and self.global_proposal:
+            self._grid_loglik = self.grid.log_likelihood(self.model, self._grid_frame)
         if self._grid_loglik is None:
             return self.uniform_particles(n, rng)
         xy, _ = self.grid.draw(self._grid_loglik, n, rng)
         return np.column_stack([xy, rng.uniform(-np.pi, np.pi, n)])
 
-    def _kld_count(self, k_bins: int) -> int:
-        cfg = self.cfg
-        n = kld_particle_count(k_bins, cfg.kld_error, cfg.kld_quantile)
-        return min(max(n, cfg.min_particles), cfg.max_particles)
-
     def _resample(self, rng: np.random.Generator) -> None:
         n = len(self.weights)
         idx = systematic_resample(self.weights, n, rng)
         self.last_k_bins = self.binner.count(self.particles, idx)
-        n_new = self._kld_count(self.last_k_bins)
+        n_new = clamped_particle_count(self.cfg, self.last_k_bins)
         if self.p_random > 0.0:
             # Fox's incremental KLD draws from the augmented mixture, so the random particles
             # (almost each in a bin of its own) raise k too: n = n_chi(k + p_random n).
             for _ in range(32):
-                n_next = self._kld_count(self.last_k_bins + int(self.p_random * n_new))
+                n_next = clamped_particle_count(
+                    self.cfg, self.last_k_bins + int(self.p_random * n_new)
+                )
                 if n_next <= n_new:
                     break
                 n_new = n_next

@@ -30,6 +30,7 @@ import itertools
 
 import numpy as np
 
+from lrp_gym.localization._ghost_kernel import ghost_rows_jit
 from lrp_gym.radar.channel import RETRO_LOBE_DEG
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.room import Room
@@ -108,6 +109,9 @@ class GhostModel:
         self._offset = np.where(odd, _IMAGES + 1, _IMAGES)[:, :2] * size[:2]
         nz = _IMAGES[:, 2]
         self._image_z = np.where(odd[:, 2], (nz + 1) * size[2] - h, nz * size[2] + h)
+        #: Use the compiled kernel for float32 (when numba is installed).
+        self.use_numba = True
+        self._rows = self._row_table()
 
     def _retro_rows(self, idx, dx, dy, dz, dist, visible, rate, out, rates) -> None:
         """Rows of the retro-directive reflectors ``idx``, in :data:`_PAIRS_RETRO` order (same
@@ -129,6 +133,50 @@ class GhostModel:
             rates.append(rate[first, sl].reshape(-1, n))
             rates.append((dtype(0.5) * (rate[0:1, sl] + rate[first, sl])).reshape(-1, n))
 
+    def _row_table(self) -> np.ndarray:
+        """Each row of :meth:`ranges` as (image a, image b, reflector, retro bistatic), in
+        the order the numpy code stacks them (for the compiled kernel)."""
+        rows: list[tuple[int, int, int, int]] = []
+        for idx, pairs, retro in self._groups:
+            if retro:
+                rows += [(int(a), int(a), int(m), 0) for a in _FIRST for m in idx]
+                rows += [(0, int(a), int(m), 1) for a in _FIRST for m in idx]
+            else:
+                rows += [(int(a), int(b), int(m), 0) for a, b in pairs for m in idx]
+        return np.array(rows, dtype=np.int64).reshape(-1, 4)
+
+    def _ranges_compiled(
+        self, xy: np.ndarray, velocity_xy: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """:meth:`ranges` in float32 with the kernel of
+        :mod:`~lrp_gym.localization._ghost_kernel` (the same values, bit for bit)."""
+        assert ghost_rows_jit is not None
+        f32 = np.float32
+        xy = np.ascontiguousarray(np.atleast_2d(np.asarray(xy))[:, :2].astype(f32))
+        n_img = len(_IMAGES) if self._any_omni else 1 + len(_FIRST)
+        dz = (self._image_z[:n_img, None] - self.positions_m[None, :, 2]).astype(f32)
+        v = np.zeros((0, 2), dtype=f32)
+        if velocity_xy is not None:
+            v = np.ascontiguousarray(np.atleast_2d(np.asarray(velocity_xy)).astype(f32))
+        out = np.empty((len(self._rows), len(xy)), dtype=f32)
+        rates = np.empty_like(out) if velocity_xy is not None else np.empty((0, 0), dtype=f32)
+        ghost_rows_jit(
+            xy,
+            v,
+            self._sign[:n_img].astype(f32),
+            np.ascontiguousarray(self._offset[:n_img]),
+            self.positions_m.astype(f32),
+            dz,
+            self.axes.astype(f32),
+            self._cos_visible.astype(f32),
+            f32(self._cos_beta_min),
+            self._rows,
+            f32(FAR_M),
+            out,
+            rates,
+        )
+        return out, (rates if velocity_xy is not None else None)
+
     @property
     def count(self) -> int:
         """Rows of :meth:`ranges`."""
@@ -139,7 +187,10 @@ class GhostModel:
     ) -> tuple[np.ndarray, np.ndarray | None]:
         """Ghost ranges (G, N) at floor positions (N, 2) (or poses (N, 3)), and their radial
         velocities (G, N) (positive when the range grows) for robot velocities
-        ``velocity_xy`` (N, 2), else None."""
+        ``velocity_xy`` (N, 2), else None. In float32 with numba installed (and
+        :attr:`use_numba`), one compiled pass gives the same values."""
+        if np.dtype(dtype) == np.float32 and self.use_numba and ghost_rows_jit is not None:
+            return self._ranges_compiled(xy, velocity_xy)
         xy = np.atleast_2d(np.asarray(xy))[:, :2].astype(dtype)
         n = len(xy)
         pos = self.positions_m.astype(dtype)

@@ -1,4 +1,11 @@
-"""KLD sampling (Fox 2003): how many particles a posterior spread over ``k`` bins needs."""
+"""KLD sampling (Fox 2003): how many particles a posterior spread over ``k`` bins needs.
+
+AMCL computes the count vectorised rather than incrementally: the ``k`` occupied bins are
+counted on a systematic resample of the current size ``N``, and the new size is
+``n_chi(k)`` clamped to ``[min_particles, max_particles]``. Because ``k`` can only grow with
+the sample size, this never asks for fewer particles than Fox's incremental rule on the same
+draw would when the population shrinks; it adapts one resampling step later when it grows.
+"""
 
 from __future__ import annotations
 
@@ -6,6 +13,8 @@ from functools import lru_cache
 
 import numpy as np
 from scipy.stats import norm
+
+from lrp_gym.config import LocalizationConfig
 
 
 @lru_cache(maxsize=16)
@@ -62,3 +71,10 @@ class KldBinner:
         k = int(np.count_nonzero(self._flags))
         self._flags[keys] = False
         return k
+
+
+def clamped_particle_count(cfg: LocalizationConfig, k_bins: int) -> int:
+    """:func:`kld_particle_count` with ``cfg``'s error and quantile, clamped to
+    ``[cfg.min_particles, cfg.max_particles]``."""
+    n = kld_particle_count(k_bins, cfg.kld_error, cfg.kld_quantile)
+    return min(max(n, cfg.min_particles), cfg.max_particles)

@@ -251,6 +251,27 @@ class FingerprintModel:
             return None
         return self.map_returns.ranges(xy, None, dtype)[0]
 
+    def map_returns_at(
+        self,
+        xy: np.ndarray,
+        fingerprint: Fingerprint,
+        velocity_xy: np.ndarray | None,
+        dtype=np.float32,
+    ) -> tuple[np.ndarray, np.ndarray | None] | None:
+        """Ranges (K, N) of the map-predicted returns at positions (N, 2) and, where the
+        Doppler term of :meth:`log_likelihood` applies to ``fingerprint`` at ``velocity_xy``
+        (N, 2), their radial velocities (K, N), else None: the ``map_ranges`` and
+        ``map_rates`` of several calls on these positions or on a subset of their columns (a
+        range does not depend on the velocity). None when the model predicts no returns."""
+        if self.map_returns is None:
+            return None
+        doppler = (
+            velocity_xy is not None
+            and self.doppler_std_mps > 0.0
+            and fingerprint.velocities_mps is not None
+        )
+        return self.map_returns.ranges(xy, velocity_xy if doppler else None, dtype)
+
     def segments(self, fingerprint: Fingerprint, doppler: bool) -> list[Segment]:
         """The fingerprint's distances per type that the likelihood weighs, sorted: types the
         layout lacks (their distances carry the same clutter factor for every position),
@@ -283,6 +304,8 @@ class FingerprintModel:
         dtype=np.float32,
         velocity_xy: np.ndarray | None = None,
         map_ranges: np.ndarray | None = None,
+        map_rates: np.ndarray | None = None,
+        expected: list[np.ndarray] | None = None,
     ) -> np.ndarray:
         """Log-likelihood (N,) float64 of ``fingerprint`` at each position of ``xy`` (N, 2).
 
@@ -293,7 +316,11 @@ class FingerprintModel:
         arithmetic runs in ``dtype`` (float32 by default: SIMD ``exp`` is several times
         faster, and distances in a room keep sub-micrometre precision); the sums are float64.
         ``map_ranges``, :meth:`map_return_ranges` of ``xy``, saves recomputing them where the
-        Doppler term does not apply (else they are computed with their velocities).
+        Doppler term does not apply; where it does, they are used only together with
+        ``map_rates``, their radial velocities at ``velocity_xy`` (:meth:`map_returns_at`),
+        and computed with their velocities otherwise. ``expected``, :meth:`expected` of ``xy``
+        in ``dtype``, likewise saves recomputing the reflectors' ranges where the Doppler term
+        does not apply (it is ignored where it does).
         """
         doppler = (
             velocity_xy is not None
@@ -304,7 +331,11 @@ class FingerprintModel:
         segments = self.segments(fingerprint, doppler)
         if not segments:
             return np.zeros(xy.shape[0])
-        return log_likelihood_terms(self, xy, segments, vel, map_ranges, dtype)
+        given = None
+        if map_ranges is not None and (vel is None or map_rates is not None):
+            given = (map_ranges, None if vel is None else map_rates)
+        expected = expected if vel is None else None
+        return log_likelihood_terms(self, xy, segments, vel, given, dtype, expected)
 
     def distance_fits(
         self, xy: np.ndarray, weights: np.ndarray, fingerprint: Fingerprint

@@ -37,7 +37,7 @@ class _Frame:
     """What the types of one frame share: positions, the expected ranges (computed on first
     use) and the map's predicted returns (computed on first use, or given)."""
 
-    def __init__(self, model, xy, velocity_xy, map_ranges, dtype) -> None:
+    def __init__(self, model, xy, velocity_xy, map_returns, dtype) -> None:
         self.model = model
         self.xy = xy
         self.velocity_xy = velocity_xy  # None without the Doppler term
@@ -45,8 +45,10 @@ class _Frame:
         self.expected: list[np.ndarray] | None = None
         self.expected_v: list[np.ndarray] | None = None
         self.extra = self.extra_v = None
-        if map_ranges is not None and velocity_xy is None:
-            self.extra = map_ranges.astype(dtype, copy=False)
+        if map_returns is not None:  # (ranges, rates), rates given iff velocity_xy is
+            self.extra = map_returns[0].astype(dtype, copy=False)
+            if map_returns[1] is not None:
+                self.extra_v = map_returns[1].astype(dtype, copy=False)
 
     def expected_of(self, t: int) -> tuple[np.ndarray, np.ndarray | None]:
         if self.expected is None:
@@ -71,12 +73,17 @@ def log_likelihood_terms(
     xy: np.ndarray,
     segments: list[Segment],
     velocity_xy: np.ndarray | None,
-    map_ranges: np.ndarray | None,
+    map_returns: tuple[np.ndarray, np.ndarray | None] | None,
     dtype,
+    expected: list[np.ndarray] | None = None,
 ) -> np.ndarray:
     """Log-likelihood (N,) of the ``segments`` of a fingerprint at positions ``xy`` (N, 2);
-    ``velocity_xy`` is None unless the Doppler term applies."""
-    frame = _Frame(model, xy, velocity_xy, map_ranges, dtype)
+    ``velocity_xy`` is None unless the Doppler term applies. ``map_returns``, if given, are
+    the map's predicted ranges (K, N) at ``xy`` and, iff ``velocity_xy`` is given, their
+    radial velocities; ``expected``, if given, the reflectors' sorted ranges at ``xy`` (the
+    Doppler term aside)."""
+    frame = _Frame(model, xy, velocity_xy, map_returns, dtype)
+    frame.expected = expected
     out = np.zeros(xy.shape[0])
     for seg in segments:
         out += _segment_term(frame, seg)

@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from lrp_gym.config import ScenarioError
 from lrp_gym.world.robot import OdometryNoise
 
 if TYPE_CHECKING:
@@ -73,3 +74,42 @@ def wrap_fast(angle_rad: np.ndarray) -> np.ndarray:
     k *= 2.0 * np.pi
     angle_rad -= k
     return angle_rad
+
+
+#: Below this speed the Doppler of static returns carries no heading information.
+MIN_DOPPLER_SPEED_MPS = 0.05
+
+
+def particle_velocities(particles: np.ndarray, speed_mps: float | None) -> np.ndarray | None:
+    """Each particle's velocity (N, 2) at ``speed_mps`` along its heading (float32); None
+    when the speed is unknown or too small for the Doppler to say anything about the
+    heading."""
+    if speed_mps is None or abs(speed_mps) < MIN_DOPPLER_SPEED_MPS:
+        return None
+    th = particles[:, 2].astype(np.float32)
+    return speed_mps * np.column_stack([np.cos(th), np.sin(th)])
+
+
+def uniform_free_particles(
+    n: int, rng: np.random.Generator, size_xy_m: np.ndarray, free, clearance_m: float
+) -> np.ndarray:
+    """``n`` poses (n, 3) uniform over the positions of the room's extent ``size_xy_m`` that
+    ``free(xy) -> bool mask`` accepts (rejection sampling), headings uniform.
+
+    Raises ScenarioError when (almost) no position is free for a robot of ``clearance_m``.
+    """
+    out = np.empty((0, 2))
+    for _ in range(1000):
+        if len(out) >= n:
+            break
+        cand = rng.random((max(2 * (n - len(out)), 16), 2)) * size_xy_m
+        out = np.concatenate([out, cand[free(cand)]])
+    if len(out) < n:
+        raise ScenarioError(
+            [
+                f"robot.radius_m: a robot of radius {clearance_m:g} m finds (almost) no "
+                "free space between the walls and room.obstacles"
+            ]
+        )
+    th = rng.uniform(-np.pi, np.pi, n)
+    return np.column_stack([out[:n], th])

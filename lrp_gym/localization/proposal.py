@@ -28,6 +28,9 @@ from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.tracking.fingerprint import Fingerprint
 
 _CHUNK = 20_000
+#: With ``every_frames > 1``, a frame may skip the test only if its deficit against the last
+#: best cell is this far below the drift (the best cell itself moves a little between frames).
+SKIP_MARGIN_NATS = 1.5
 
 
 class MeasurementGrid:
@@ -57,6 +60,7 @@ class MeasurementGrid:
         self._free = free
         self._map_model: FingerprintModel | None = None
         self._map_ranges: list[np.ndarray | None] = []
+        self._expected: list[list[np.ndarray]] = []
 
     def __len__(self) -> int:
         return len(self.centres_m)
@@ -67,13 +71,15 @@ class MeasurementGrid:
         xy = self.centres_m
         chunks = range(0, len(xy), _CHUNK)
         if self._map_model is not model:
-            # The cells do not move: the map's predicted returns there are computed once.
+            # The cells do not move: the map's predicted returns and the reflectors' ranges
+            # there are computed once per model.
             self._map_model = model
             self._map_ranges = [model.map_return_ranges(xy[i : i + _CHUNK]) for i in chunks]
+            self._expected = [model.expected(xy[i : i + _CHUNK], np.float32) for i in chunks]
         return np.concatenate(
             [
-                model.log_likelihood(xy[i : i + _CHUNK], fingerprint, map_ranges=ranges)
-                for i, ranges in zip(chunks, self._map_ranges, strict=True)
+                model.log_likelihood(xy[i : i + _CHUNK], fingerprint, map_ranges=r, expected=e)
+                for i, r, e in zip(chunks, self._map_ranges, self._expected, strict=True)
             ]
             or [np.zeros(0)]
         )
@@ -108,6 +114,12 @@ class LostTest:
     drift_per_distance_nats : float
         The same per measured distance: the chance fit grows with the number of distances
         weighed, so a frame's drift is ``max(drift_nats, drift_per_distance_nats * count)``.
+    every_frames : int
+        While quiet, the test runs on at least one frame in this many (:meth:`due`).
+    frames_skipped : int
+        Frames skipped since the test last ran.
+    last_best_nats : float or None
+        The best grid cell's log-likelihood when the test last ran.
     threshold_nats : float
         Statistic at which the cloud counts as lost (probability 1/2).
     statistic_nats : float
@@ -121,10 +133,51 @@ class LostTest:
     drift_per_distance_nats: float = 0.0
     statistic_nats: float = 0.0
     last_deficit_nats: float = 0.0
+    every_frames: int = 1
+    frames_skipped: int = 0
+    last_best_nats: float | None = None
 
     def reset(self) -> None:
         self.statistic_nats = 0.0
         self.last_deficit_nats = 0.0
+        self.frames_skipped = 0
+        self.last_best_nats = None
+
+    def drift_for(self, n_distances: int) -> float:
+        """A frame's drift: ``max(drift_nats, drift_per_distance_nats * n_distances)``."""
+        return max(self.drift_nats, self.drift_per_distance_nats * n_distances)
+
+    def due(self, quiet: bool, marginal: float | None = None, n_distances: int = 0) -> bool:
+        """Whether to evaluate the grid and run the test in this frame (always with
+        ``every_frames`` 1). It may be skipped, up to ``every_frames - 1`` frames in a row, only
+        when ``quiet`` (the filter has converged, no recovery under way), the statistic is 0,
+        and the cloud's ``marginal`` log-likelihood of this frame is within the drift, less
+        :data:`SKIP_MARGIN_NATS`, of the best cell of the last evaluated grid: a frame that
+        could add evidence (a kidnap drops the marginal by many nats) always runs the test."""
+        if (
+            quiet
+            and self.statistic_nats == 0.0
+            and self.frames_skipped + 1 < self.every_frames
+            and self.last_best_nats is not None
+            and marginal is not None
+            and self.last_best_nats - marginal <= self.drift_for(n_distances) - SKIP_MARGIN_NATS
+        ):
+            self.frames_skipped += 1
+            return False
+        self.frames_skipped = 0
+        return True
+
+    @staticmethod
+    def marginal(cloud_loglik: np.ndarray, weights: np.ndarray) -> float | None:
+        """The cloud's marginal log-likelihood: ``log sum_k w_k L_k`` with the weights
+        normalised; None when they sum to 0."""
+        total = float(np.sum(weights))
+        if not total > 0.0:
+            return None
+        # Plain numpy: scipy's logsumexp costs ~0.6 ms per call here (env step path).
+        top = float(np.max(cloud_loglik))
+        with np.errstate(divide="ignore"):  # all weight on -inf particles: -inf, no warning
+            return top + float(np.log(np.dot(weights / total, np.exp(cloud_loglik - top))))
 
     def update(
         self,
@@ -135,15 +188,15 @@ class LostTest:
     ) -> None:
         """Add one frame: ``cloud_loglik`` (K,) of particles with ``weights`` (K,), from a
         fingerprint of ``n_distances`` measured distances."""
-        total = float(np.sum(weights))
-        if not total > 0.0:
+        self.update_marginal(best_loglik, self.marginal(cloud_loglik, weights), n_distances)
+
+    def update_marginal(self, best_loglik: float, marginal: float | None, n_distances: int) -> None:
+        """:meth:`update` from the cloud's :meth:`marginal` (None: no frame to add)."""
+        self.last_best_nats = best_loglik
+        if marginal is None:
             return
-        # Plain numpy: scipy's logsumexp costs ~0.6 ms per call here (env step path).
-        top = float(np.max(cloud_loglik))
-        with np.errstate(divide="ignore"):  # all weight on -inf particles: -inf, no warning
-            marginal = top + float(np.log(np.dot(weights / total, np.exp(cloud_loglik - top))))
         self.last_deficit_nats = best_loglik - marginal
-        drift = max(self.drift_nats, self.drift_per_distance_nats * n_distances)
+        drift = self.drift_for(n_distances)
         self.statistic_nats = max(0.0, self.statistic_nats + self.last_deficit_nats - drift)
 
     @property

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lrp_gym.config.localization import LocalizationConfig
 from lrp_gym.world.robot import OdometryNoise, apply_odometry, wrap_angle
 
 #: Weight of the newest frame in the mean (about five frames of memory).
@@ -74,3 +75,8 @@ class SlipMonitor:
         z2 = max((dxy / sigma_xy) ** 2, (dth / sigma_th) ** 2)
         self._mean_z2 += _ALPHA * (z2 - self._mean_z2)
         self.scale = float(np.clip(np.sqrt(self._mean_z2), 1.0, self.max_inflation))
+
+
+def slip_monitor(noise: OdometryNoise, cfg: LocalizationConfig) -> SlipMonitor | None:
+    """A fresh monitor for a localiser with motion noise ``noise``, if ``cfg`` asks for one."""
+    return SlipMonitor(noise, cfg.slip_max_inflation) if cfg.slip_adaptive else None

@@ -15,6 +15,7 @@ from lrp_gym.config import load_scenario
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.particle_statistics import dominant_cluster
+from lrp_gym.localization.proposal import LostTest, MeasurementGrid
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world import World
 from lrp_gym.world.robot import odometry_delta
@@ -240,3 +241,43 @@ def test_recovery_scored_later_on_another_fingerprint_equals_in_update(room):
                 assert (amcl.w_fast, amcl.w_slow) != before  # the deferred call scored it
         stats.append((amcl.w_fast, amcl.w_slow, amcl.p_random))
     np.testing.assert_allclose(stats[0], stats[1])
+
+
+def test_lost_test_schedule_skips_only_quiet_frames():
+    """``lost_test_every``: a frame skips the test only while quiet, with the statistic at 0
+    and the cloud's marginal close to the last best cell, and at most k - 1 frames in a row."""
+    test = LostTest(drift_nats=4.0, every_frames=3)
+    assert test.due(True, -10.0) is True  # no grid evaluated yet
+    test.update_marginal(-10.0, -10.5, 0)  # deficit 0.5 < drift: the statistic stays 0
+    assert test.statistic_nats == 0.0
+    assert [test.due(True, -10.5) for _ in range(6)] == [False, False, True] * 2
+    assert test.due(False, -10.5) is True  # not quiet: the test runs and the count restarts
+    assert test.due(True, -10.5) is False
+    assert test.due(True, -10.0 - 4.0 + 1.0) is True  # within the margin of the drift: runs
+    assert test.due(True, -30.0) is True  # the cloud's likelihood drops (a kidnap): runs
+    assert test.due(True, None) is True
+    test.statistic_nats = 1.0  # evidence building up: every frame
+    assert all(test.due(True, -10.5) for _ in range(4))
+    every = LostTest(every_frames=1)
+    every.update_marginal(-10.0, -10.5, 0)
+    assert all(every.due(True, -10.5) for _ in range(4))
+
+
+def test_kidnap_recovery_with_the_lost_test_every_8_frames(room, monkeypatch):
+    """With the grid skipped on quiet frames the filter evaluates it less often and still
+    recovers from the kidnaps of :func:`test_recovers_from_kidnapping_within_15_frames`."""
+    world, loc = room
+    calls = []
+    grid_ll = MeasurementGrid.log_likelihood
+    monkeypatch.setattr(
+        MeasurementGrid, "log_likelihood", lambda g, *a: calls.append(1) or grid_ll(g, *a)
+    )
+    sparse = loc.model_copy(update={"lost_test_every": 8})
+    recovered, frames = [], 0
+    for seed in range(10):
+        errors, _ = _drive(world, sparse, seed, KIDNAP_FRAME + 20, kidnap=True)
+        after = errors[KIDNAP_FRAME:]
+        recovered.append(np.all(after[15:] < 0.2) and np.any(after[:16] < 0.2))
+        frames += len(errors)
+    assert np.mean(recovered) >= 0.9, recovered
+    assert len(calls) < 0.6 * frames  # (every frame: at least one call per frame)
