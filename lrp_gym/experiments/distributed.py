@@ -201,3 +201,38 @@ def run_matrix_units(
         out.append(rb.cell_from_results(name, sev, results, seed))
     head = {"agent": agent, "env_id": env_id, "scenario": scenario, "task": task}
     return {**head, "episodes": episodes, "seed": seed, "cells": out}
+
+
+def run_episodes_units(
+    make_policy: Callable[[gym.Env], Policy],
+    agent: str,
+    env_id: str | None,
+    scenario: str | None,
+    overrides: dict[str, Any] | None,
+    episodes: int,
+    seed: int,
+    num_envs: int = 1,
+    **run: Any,
+) -> dict[str, Any]:
+    """:func:`lrp_gym.experiments.episodes.run_episodes` (without the GIF) with the seeds cut
+    into :class:`EpisodeSlice` units run by :func:`lrp_gym.experiments.cluster.run_units`
+    (``run``: its ``address``, ``sidecar``, ``resume`` and ``on_result``); the same summary."""
+    from lrp_gym.experiments.cluster import run_units
+    from lrp_gym.experiments.episodes import summarize
+
+    if episodes < 1:
+        raise ValueError(f"n_episodes: must be at least 1, got {episodes}")
+    units = [
+        (
+            slice_key("episodes", seeds),
+            EpisodeSlice(agent, env_id, scenario, overrides or None, seeds, make_policy, num_envs),
+        )
+        for seeds in seed_slices(seed, episodes)
+    ]
+    parts = run_units(run_slice, units, encode=encode_episodes, decode=decode_episodes, **run)
+    results = [r for part in parts for r in part]
+    summary = summarize(results)
+    summary["seed"] = seed
+    summary["per_episode"] = [r.row() for r in results]
+    summary["_results"] = results
+    return summary
