@@ -61,6 +61,9 @@ class ScenarioCommand(TyperCommand):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
+        for p in self.params:  # a required positional (sweep's CONFIG): its metavar, plainly
+            if isinstance(p, TyperArgument) and p.required:
+                p.__class__ = _RequiredArgument
         arg = next((p for p in self.params if p.name == "scenario"), None)
         if arg is None:
             return
@@ -116,6 +119,14 @@ def fill_optional_values(args: list[str], options: set[str]) -> list[str]:
 class _ScenarioArgument(TyperArgument):
     def display_type_rich(self, ctx: typer.Context) -> str | None:  # type: ignore[override]
         return None  # the metavar SCENARIO and the help say what it is; no "<str>"
+
+
+class _RequiredArgument(TyperArgument):
+    def display_type_rich(self, ctx: typer.Context) -> str | None:  # type: ignore[override]
+        return None  # the metavar (CONFIG) and the help say what it is; no "<path>"
+
+    def _usage_display_name(self) -> str:
+        return self.display_name_raw  # CONFIG, not typer's {CONFIG}
 
 
 def sets_option() -> Any:

@@ -289,19 +289,7 @@ def _random_rooms(
         )
 
     if run is not None:
-        from dataclasses import asdict
-
-        from lrp_gym.experiments.cluster import run_units
-        from lrp_gym.experiments.rooms import RoomUnit, room_from_json, room_result
-
-        units = [
-            (f"room {s}", RoomUnit(s, runs, seed, over, estimator, False, localizer))
-            for s in range(n)
-        ]
-        results = run_units(
-            room_result, units, encode=asdict, decode=room_from_json,
-            on_result=lambda _key, r: progress(r), **run,
-        )  # fmt: skip
+        results = _rooms_on_ray(n, runs, seed, over, estimator, localizer, run, progress)
     else:
         results = sweep(
             range(n),
@@ -325,6 +313,22 @@ def _random_rooms(
     _print_rooms(results, data, runs)
     if json_path:
         wrote(json_path)
+
+
+def _rooms_on_ray(n, runs, seed, over, estimator, localizer, run, progress) -> list:
+    """The generated rooms as Ray tasks, one room each (``run``: address, sidecar, resume)."""
+    from dataclasses import asdict
+
+    from lrp_gym.experiments.cluster import run_units
+    from lrp_gym.experiments.rooms import RoomUnit, room_from_json, room_result
+
+    units = [
+        (f"room {s}", RoomUnit(s, runs, seed, over, estimator, False, localizer)) for s in range(n)
+    ]
+    return run_units(
+        room_result, units, encode=asdict, decode=room_from_json,
+        on_result=lambda _key, r: progress(r), **run,
+    )  # fmt: skip
 
 
 def _print_rooms(results: list, data: dict, runs: int) -> None:

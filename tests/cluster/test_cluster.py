@@ -119,3 +119,18 @@ def test_partial_results_need_resume_or_force(tmp_path, capsys):
     assert code == 2 and err.startswith("error: --out:") and "--resume" in err
     code, _, err = run(capsys, *argv, "--resume")
     assert code == 2 and err.startswith("error: --resume:") and "another study" in err
+
+
+def test_sweep_file_problems_name_the_key(tmp_path, capsys, monkeypatch):
+    bad = tmp_path / "s.yaml"
+    bad.write_text("timesteps: 64\nseeds: [0]\ngrid: {learning_rate: []}\n")
+    code, _, err = run(capsys, "sweep", str(bad), "--out", str(tmp_path / "o"))
+    assert code == 2 and err.startswith("error: CONFIG:") and "grid:" in err
+    bad.write_text("timesteps: 64\nlearning_rate: 0.1\n")
+    code, _, err = run(capsys, "sweep", str(bad), "--out", str(tmp_path / "o"))
+    assert code == 2 and "unknown key(s) learning_rate" in err
+    monkeypatch.setitem(sys.modules, "ray", None)
+    good = "configs/sweep-smoke.yaml"
+    code, _, err = run(capsys, "sweep", good, "--out", str(tmp_path / "o"))
+    assert code == 2 and "pip install lrp-gym[cluster]" in err
+    assert not (tmp_path / "o").exists()  # nothing started
