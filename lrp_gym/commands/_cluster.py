@@ -47,10 +47,14 @@ def check_ray_options(
 ) -> Any:
     """Check ``--ray`` and ``--resume`` before any work; the sidecar to write (or None).
 
+    Ray is started or joined here, last, so that an unreachable cluster is reported before
+    any work.
+
     Raises
     ------
     InputError
-        Ray not installed (naming ``pip install lrp-gym[cluster]``), a malformed address,
+        Ray not installed (naming ``pip install lrp-gym[cluster]``), a malformed or
+        unreachable address,
         ``--resume`` without ``--ray`` / ``--out`` or with another study's partial results,
         or partial results beside ``--out`` that neither ``--resume`` nor ``--force`` allows
         to touch.
@@ -64,19 +68,21 @@ def check_ray_options(
     with as_flags(address="--ray", ray="--ray"):
         cluster.check_address(ray)
         cluster.import_ray()
-    if out_path is None:
+    side = None
+    if out_path is not None:
+        side = cluster.Sidecar(cluster.sidecar_path(out_path), study)
         if resume:
-            raise InputError("--resume: needs --out (the partial results are kept beside it)")
-        return None
-    side = cluster.Sidecar(cluster.sidecar_path(out_path), study)
-    if resume:
-        with as_flags(resume="--resume"):
-            side.load()
-    elif side.path.exists() and not force:
-        raise InputError(
-            f"--out: {side.path} holds the partial results of an earlier run; add --resume "
-            "to complete it, or --force to start over"
-        )
+            with as_flags(resume="--resume"):
+                side.load()
+        elif side.path.exists() and not force:
+            raise InputError(
+                f"--out: {side.path} holds the partial results of an earlier run; add "
+                "--resume to complete it, or --force to start over"
+            )
+    elif resume:
+        raise InputError("--resume: needs --out (the partial results are kept beside it)")
+    with as_flags(address="--ray"):
+        cluster.connect(ray)  # before any work: an unreachable cluster fails here
     return side
 
 

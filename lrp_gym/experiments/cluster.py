@@ -65,7 +65,8 @@ def connect(address: str, num_cpus: int | None = None) -> Any:
 
     A local Ray gets this machine's cores (or ``num_cpus``), no dashboard and a small object
     store. Workers import this checkout: its root goes first on their ``PYTHONPATH``, so a run
-    from a source tree does not pick up another installed copy.
+    from a source tree does not pick up another installed copy. ValueError naming ``address``
+    when there is no cluster there.
     """
     ray = import_ray()
     if ray.is_initialized():
@@ -82,7 +83,11 @@ def connect(address: str, num_cpus: int | None = None) -> Any:
             "num_cpus": num_cpus or os.cpu_count() or 1,
             "object_store_memory": LOCAL_OBJECT_STORE_BYTES,
         }
-    ray.init(address=address, **kwargs)
+    try:
+        ray.init(address=address, **kwargs)
+    except ConnectionError as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ValueError(f"address: no Ray cluster at {address!r} ({first})") from None
     return ray
 
 
