@@ -86,3 +86,16 @@ def test_evaluate_on_ray_equals_local(capsys):
     local = run(capsys, *argv)
     assert run(capsys, *argv, "--ray", "auto") == local  # the Ray this process runs
     assert [r["seed"] for r in json.loads(local)["per_episode"]] == list(range(30, 36))
+
+
+def test_workers_import_this_checkout():
+    import lrp_gym
+
+    def where(_unit):  # nested: pickled by value (workers cannot import the tests)
+        import lrp_gym
+
+        return lrp_gym.__file__
+
+    # A checkout run with PYTHONPATH may sit beside another installed copy: the workers must
+    # import the driver's, or their numbers would be another version's.
+    assert cluster.run_units(where, [("a", 0), ("b", 1)], "local") == [lrp_gym.__file__] * 2
