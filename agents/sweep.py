@@ -38,8 +38,8 @@ from lrp_gym.errors import InputError
 KEYS: tuple[str, ...] = ("config", "env", "timesteps", "report_every", "seeds", "grid")
 KEYS += ("hyperparams", LRP_KEY, "metric", "max_failures")
 METRICS = ("success_rate", "mean_reward")
-#: Fault injection for tests: one trial of seed 0 fails once after its first report (it
-#: creates the marker file this variable names).
+#: Fault injection for tests: one trial of seed 0 kills its worker process once, after its
+#: first report (it creates the marker file this variable names).
 FAIL_ONCE_ENV = "LRP_GYM_SWEEP_FAIL_ONCE"
 
 
@@ -194,7 +194,7 @@ def _maybe_fail_once(params: dict[str, Any]) -> None:
         os.close(os.open(marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY))  # one trial wins
     except FileExistsError:
         return
-    raise RuntimeError("fault injection: the trial's worker is lost once")
+    os._exit(1)  # the worker process dies, as on a lost node: Tune restarts the trial
 
 
 def run_sweep(

@@ -1,5 +1,5 @@
 """``lrp-gym sweep`` at smoke size (2 seeds x 2 learning rates, 256 steps): every trial
-reports, a trial that fails once resumes from its checkpoint, the best is exported, and
+reports, a trial whose worker is killed resumes from its checkpoint, the best is exported, and
 ``--resume`` on the finished sweep gives the same trials (about a minute: integration)."""
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def test_sweep_resumes_a_lost_trial_and_exports_the_best(tmp_path):
         "2",
         env={"LRP_GYM_SWEEP_FAIL_ONCE": str(marker)},
     )
-    assert marker.is_file()  # one trial (seed 0) failed after its first report
+    assert marker.is_file()  # one trial (seed 0) killed its worker after its first report
     rows = doc["trials"]
     assert sorted((r["params"]["seed"], r["params"]["learning_rate"]) for r in rows) == [
         (0, 3e-4),
