@@ -99,3 +99,11 @@ def test_workers_import_this_checkout():
     # A checkout run with PYTHONPATH may sit beside another installed copy: the workers must
     # import the driver's, or their numbers would be another version's.
     assert cluster.run_units(where, [("a", 0), ("b", 1)], "local") == [lrp_gym.__file__] * 2
+
+
+def test_reproduce_runs_on_ray_equal_local(capsys):
+    argv = ["reproduce-paper", "--runs", "3", "--fidelity", "detections", "--noise", "--json"]
+    local, on_ray = json.loads(run(capsys, *argv)), json.loads(run(capsys, *argv, "--ray"))
+    for doc in (local, on_ray):  # wall times
+        doc.pop("frame_ms"), doc.pop("lut_build_s")
+    assert on_ray == local and local["runs"] == 3
