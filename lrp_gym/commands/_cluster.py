@@ -101,7 +101,9 @@ class PolicyFactory:
     env: Ray sends it to the workers, which build the policy there."""
 
     def __init__(self, agent: str, model: Path | None, seed: int) -> None:
-        self.agent, self.model, self.seed = agent, model, seed
+        # absolute: a worker's folder (or node) is not the driver's
+        self.agent, self.seed = agent, seed
+        self.model = None if model is None else Path(model).resolve()
 
     def __call__(self, env: Any) -> Any:
         from agents.registry import make_agent

@@ -17,6 +17,7 @@ import json
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -60,7 +61,7 @@ class EpisodeSlice:
 
     agent: str
     env_id: str | None
-    scenario: str | None
+    scenario: Any  # a scenario name, or a ScenarioConfig (see unit_scenario)
     overrides: dict[str, Any] | None
     seeds: tuple[int, ...]
     make_policy: Callable[[gym.Env], Policy]
@@ -72,8 +73,22 @@ _ENVS: OrderedDict[str, tuple[gym.Env, Policy]] = OrderedDict()
 _MAX_ENVS = 4
 
 
+def unit_scenario(scenario: Any) -> Any:
+    """What a task gets as its scenario: a name as is, a YAML file loaded here (a worker's
+    folder, or node, need not have the file)."""
+    if isinstance(scenario, str) and Path(scenario).is_file():
+        from lrp_gym.config import load_scenario
+
+        return load_scenario(scenario)
+    return scenario
+
+
+def _key(value: Any) -> Any:
+    return value.to_dict() if hasattr(value, "to_dict") else str(value)
+
+
 def _env_and_policy(s: EpisodeSlice) -> tuple[gym.Env, Policy]:
-    key = json.dumps([s.agent, s.env_id, s.scenario, s.overrides], sort_keys=True)
+    key = json.dumps([s.agent, s.env_id, s.scenario, s.overrides], sort_keys=True, default=_key)
     if key not in _ENVS:
         env = make_eval_env(s.agent, s.env_id, s.scenario, overrides=s.overrides or None)
         _ENVS[key] = (env, s.make_policy(env))
@@ -185,10 +200,11 @@ def run_matrix_units(
     rb._check(perturbations, severities, episodes)
     scenario, overrides = rb.scenario_and_task(task, scenario, overrides)
     cells = rb.matrix_cells(perturbations, severities, overrides)
+    where = unit_scenario(scenario)
     units = [
         (
             slice_key(rb.cell_label(name, sev), seeds),
-            EpisodeSlice(agent, env_id, scenario, cell or None, seeds, make_policy, num_envs),
+            EpisodeSlice(agent, env_id, where, cell or None, seeds, make_policy, num_envs),
         )
         for name, sev, cell in cells
         for seeds in seed_slices(seed, episodes)
@@ -222,10 +238,11 @@ def run_episodes_units(
 
     if episodes < 1:
         raise ValueError(f"n_episodes: must be at least 1, got {episodes}")
+    where = unit_scenario(scenario)
     units = [
         (
             slice_key("episodes", seeds),
-            EpisodeSlice(agent, env_id, scenario, overrides or None, seeds, make_policy, num_envs),
+            EpisodeSlice(agent, env_id, where, overrides or None, seeds, make_policy, num_envs),
         )
         for seeds in seed_slices(seed, episodes)
     ]

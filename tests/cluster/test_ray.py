@@ -80,9 +80,13 @@ def test_layout_search_on_ray_equals_local(capsys):
     assert on_ray == local and local["evaluations"] == 120
 
 
-def test_evaluate_on_ray_equals_local(capsys):
-    argv = ["evaluate", "--fidelity", "detections", "--task", "goal", "--episodes", "6"]
-    argv += ["--seed", "30", "--json"]
+def test_evaluate_on_ray_equals_local(capsys, tmp_path, monkeypatch):
+    from lrp_gym.config import SCENARIOS_DIR
+
+    (tmp_path / "room.yaml").write_text((SCENARIOS_DIR / "ipin2023.yaml").read_text())
+    monkeypatch.chdir(tmp_path)  # a scenario file named relative to the driver's folder
+    argv = ["evaluate", "room.yaml", "--fidelity", "detections", "--task", "goal"]
+    argv += ["--episodes", "6", "--seed", "30", "--json"]
     local = run(capsys, *argv)
     assert run(capsys, *argv, "--ray", "auto") == local  # the Ray this process runs
     assert [r["seed"] for r in json.loads(local)["per_episode"]] == list(range(30, 36))
