@@ -63,8 +63,8 @@ def project_root() -> Path:
 def connect(address: str, num_cpus: int | None = None) -> Any:
     """Start (``local``) or join (``auto``, ``HOST:PORT``) Ray unless this process already is.
 
-    A local Ray gets this machine's cores (or ``num_cpus``), no dashboard and a small object
-    store. Workers import this checkout: its root goes first on their ``PYTHONPATH``, so a run
+    A local Ray gets this machine's cores (or ``num_cpus``), no dashboard, a small object
+    store and workers at normal priority (``RAY_worker_niceness=0`` unless set). Workers import this checkout: its root goes first on their ``PYTHONPATH``, so a run
     from a source tree does not pick up another installed copy. ValueError naming ``address``
     when there is no cluster there.
     """
@@ -79,6 +79,9 @@ def connect(address: str, num_cpus: int | None = None) -> Any:
         "logging_level": "warning",
     }
     if address == LOCAL:
+        # Ray nices its workers (15) below the driver; here the driver only waits, and on a
+        # shared machine niced workers lose every core to other users' processes.
+        os.environ.setdefault("RAY_worker_niceness", "0")
         kwargs |= {
             "num_cpus": num_cpus or os.cpu_count() or 1,
             "object_store_memory": LOCAL_OBJECT_STORE_BYTES,
