@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml
 	@# torch first, pinned: on these machines 2.13.0 is a local CPU wheel; any other
 	@# spec pulls a multi-GB CUDA build. The rl extra then accepts the installed torch.
 	$(PY) -m pip install --quiet torch==2.13.0
-	$(PY) -m pip install --quiet -e '.[rl,dev,fast,zoo,video]'
+	$(PY) -m pip install --quiet -e '.[rl,dev,fast,zoo,video,cluster]'
 	@touch $(STAMP)
 
 install: $(STAMP)

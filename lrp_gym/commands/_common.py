@@ -61,6 +61,9 @@ class ScenarioCommand(TyperCommand):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
+        for p in self.params:  # a required positional (sweep's CONFIG): its metavar, plainly
+            if isinstance(p, TyperArgument) and p.required:
+                p.__class__ = _RequiredArgument
         arg = next((p for p in self.params if p.name == "scenario"), None)
         if arg is None:
             return
@@ -76,7 +79,8 @@ class ScenarioCommand(TyperCommand):
         )
 
     def parse_args(self, ctx: typer.Context, args: list[str]) -> list[str]:  # type: ignore[override]
-        rest = super().parse_args(ctx, args)
+        own = {o for p in self.params for o in getattr(p, "opts", ())}
+        rest = super().parse_args(ctx, fill_optional_values(args, own))
         alias = ctx.params.pop(_ALIAS, None)
         if alias is not None:
             source = ctx.get_parameter_source("scenario")
@@ -92,10 +96,37 @@ class ScenarioCommand(TyperCommand):
 
 _ALIAS = "scenario_alias"
 
+#: Options whose value may be left out, and what a bare one means (``--ray`` alone: a Ray
+#: started here). typer's parser has no optional values, so the value is filled in first.
+OPTIONAL_VALUES = {"--ray": "local"}
+
+
+def fill_optional_values(args: list[str], options: set[str]) -> list[str]:
+    """``args`` with the value of every bare optional-value option among ``options`` filled
+    in: one followed by nothing or by another option (``--ray --episodes 5``)."""
+    out: list[str] = []
+    for i, arg in enumerate(args):
+        if arg == "--":
+            return out + args[i:]
+        out.append(arg)
+        if arg in OPTIONAL_VALUES and arg in options:
+            following = args[i + 1] if i + 1 < len(args) else None
+            if following is None or following.startswith("-"):
+                out.append(OPTIONAL_VALUES[arg])
+    return out
+
 
 class _ScenarioArgument(TyperArgument):
     def display_type_rich(self, ctx: typer.Context) -> str | None:  # type: ignore[override]
         return None  # the metavar SCENARIO and the help say what it is; no "<str>"
+
+
+class _RequiredArgument(TyperArgument):
+    def display_type_rich(self, ctx: typer.Context) -> str | None:  # type: ignore[override]
+        return None  # the metavar (CONFIG) and the help say what it is; no "<path>"
+
+    def _usage_display_name(self) -> str:
+        return self.display_name_raw  # CONFIG, not typer's {CONFIG}
 
 
 def sets_option() -> Any:

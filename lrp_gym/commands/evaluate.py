@@ -7,6 +7,13 @@ from typing import Any
 
 import typer
 
+from lrp_gym.commands._cluster import (
+    PolicyFactory,
+    check_ray_options,
+    ray_option,
+    reject_random_agent,
+    resume_option,
+)
 from lrp_gym.commands._common import (
     FIDELITIES,
     as_flags,
@@ -114,6 +121,8 @@ def evaluate(
     episodes: int = episodes_option(),
     seed: int = seed_option("Seed of the first episode."),
     num_envs: int = num_envs_option(),
+    ray: str = ray_option("the episodes, 5 seeds a task,"),
+    resume: bool = resume_option(),
     out: Path = out_option("the metrics as JSON"),
     gif: Path = typer.Option(
         None, "--gif", metavar="FILE.gif", help="Write the first episode as an animated GIF."
@@ -134,11 +143,16 @@ def evaluate(
     gif_path = check_output(gif, "--gif", force, (".gif",))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
     check_distinct(out_path, gif_path, plot_path)
+    reject_random_agent(agent, ray)
+    if ray is not None and gif_path is not None:
+        raise InputError("--gif: not with --ray (run the episode to record without it)")
+    over = overrides(scenario, sets, fidelity)
+    study = dict(command="evaluate", agent=agent, model=model, env=env, task=task, seed=seed)
+    sidecar = check_ray_options(ray, resume, out_path, force, study | {"overrides": over})
     from agents import registry as ev
     from lrp_gym.config import deep_merge
     from lrp_gym.experiments import episodes as ep
 
-    over = overrides(scenario, sets, fidelity)
     if task is not None:
         over = deep_merge(over, {"task": {"mode": task}})
     with as_flags(env_id="--env"):
@@ -151,15 +165,22 @@ def evaluate(
     cfg = ep.nav_env(env_obj).cfg
     try:
         with as_flags(n_episodes="--episodes", num_envs="--num-envs"):
-            summary = ep.run_episodes(
-                policy,
-                env_obj,
-                episodes,
-                seed,
-                gif_path=gif_path,
-                progress=None if json_out else _show,
-                num_envs=num_envs,
-            )
+            if ray is not None:
+                show = None if json_out else _show
+                run = dict(address=ray, sidecar=sidecar, resume=resume)
+                summary = _on_ray(
+                    agent, model, seed, env, scenario, over, episodes, num_envs, show, run
+                )
+            else:
+                summary = ep.run_episodes(
+                    policy,
+                    env_obj,
+                    episodes,
+                    seed,
+                    gif_path=gif_path,
+                    progress=None if json_out else _show,
+                    num_envs=num_envs,
+                )
     finally:
         env_obj.close()
     doc = {
@@ -174,6 +195,8 @@ def evaluate(
     }
     if out_path is not None:
         write_json(doc, out_path)
+    if sidecar is not None:
+        sidecar.remove()  # the result is whole: the partial results are no longer needed
     title = (
         f"{agent} on {env_id} ({scenario}, {cfg.task.mode}), seeds {seed}..{seed + episodes - 1}"
     )
@@ -189,6 +212,20 @@ def evaluate(
     for p in (gif_path, out_path, plot_path):
         if p is not None:
             wrote(p, quiet=json_out)
+
+
+def _on_ray(agent, model, seed, env, scenario, over, episodes, num_envs, show, run) -> dict:
+    """The evaluation as Ray tasks (``run``: address, sidecar, resume); ``show`` each episode."""
+    from lrp_gym.experiments.distributed import run_episodes_units
+
+    def shown(_key, part) -> None:
+        for res in part if show is not None else ():
+            show(res)
+
+    return run_episodes_units(
+        PolicyFactory(agent, model, seed), agent, env, scenario, over, episodes, seed,
+        num_envs, on_result=shown, **run,
+    )  # fmt: skip
 
 
 def _show(res) -> None:

@@ -9,6 +9,7 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from lrp_gym.commands._cluster import check_ray_options, ray_option, resume_option
 from lrp_gym.commands._common import (
     as_flags,
     atomic_path,
@@ -59,6 +60,8 @@ def layout(
         help="Write the scenario with the chosen layout to this YAML file (never over a "
         "shipped scenario; an existing file only with --force).",
     ),
+    ray: str = ray_option("the random search's candidates, 50 a task,"),
+    resume: bool = resume_option(),
     plot: str = plot_option("the ambiguity map of the chosen layout"),
     force: bool = force_option(),
     json_out: bool = json_option("the result"),
@@ -74,8 +77,15 @@ def layout(
     out_path = check_output(out, "--out", force, (".yaml", ".yml"))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
     check_distinct(out_path, plot_path)
+    if ray is not None and method != "random":
+        raise InputError(
+            "--ray: only with --method random (the optimiser's generations depend on each other)"
+        )
+    study = dict(command="layout", scenario=scenario, sets=sets, types=types, seed=seed)
+    sidecar = check_ray_options(ray, resume, out_path, force, study | {"candidates": candidates})
     cfg = _with_types(load_config(scenario, sets), types)
-    summary, new_cfg, analysis = _search(cfg, method, candidates, seed, json_out)
+    scorer = None if ray is None else _RayScorer(ray, sidecar, resume)
+    summary, new_cfg, analysis = _search(cfg, method, candidates, seed, json_out, scorer)
     if out_path is not None:
         from lrp_gym.config import save_scenario
 
@@ -87,6 +97,8 @@ def layout(
 
         save_figure(plot_scenario_map(new_cfg, analysis), plot_path)
         summary["plot"] = str(plot_path)
+    if sidecar is not None:
+        sidecar.remove()  # the result is whole: the partial results are no longer needed
     if json_out:
         print_json(summary)
     else:
@@ -113,7 +125,39 @@ def _with_types(cfg, types: int | None):
     return cfg
 
 
-def _search(cfg, method: str, candidates: int | None, seed: int, quiet: bool):
+class _RayScorer:
+    """Scores the random search's candidates in slices of 50 as Ray tasks (same scores);
+    ``progress(done, total)`` is called as slices finish."""
+
+    def __init__(self, address: str, sidecar, resume: bool) -> None:
+        self.address, self.sidecar, self.resume = address, sidecar, resume
+        self.progress = None
+
+    def __call__(self, problem, layouts):
+        import numpy as np
+
+        from lrp_gym.experiments.cluster import run_units
+        from lrp_gym.experiments.distributed import layout_slices, score_slice
+
+        done = [0]
+
+        def advance(_key, part) -> None:
+            done[0] += len(part)
+            if self.progress is not None:
+                self.progress(done[0], len(layouts))
+
+        parts = run_units(
+            score_slice,
+            layout_slices(problem, layouts),
+            self.address,
+            self.sidecar,
+            self.resume,
+            on_result=advance,
+        )
+        return np.array([s for part in parts for s in part])
+
+
+def _search(cfg, method: str, candidates: int | None, seed: int, quiet: bool, scorer=None):
     from lrp_gym.placement.scenario import analyse_scenario, layout_arrays, with_layout
     from lrp_gym.placement.search import PlacementProblem, search_layout
 
@@ -129,6 +173,8 @@ def _search(cfg, method: str, candidates: int | None, seed: int, quiet: bool):
         disable=quiet,
     ) as bar:
         task = bar.add_task("search", total=n)
+        if scorer is not None:
+            scorer.progress = lambda done, total: bar.update(task, completed=done)
         with as_flags(candidates="--candidates", method="--method"):
             result = search_layout(
                 problem,
@@ -137,6 +183,7 @@ def _search(cfg, method: str, candidates: int | None, seed: int, quiet: bool):
                 seed,
                 cfg.placement.refine_top,
                 progress=lambda done, total: bar.update(task, completed=done),
+                scorer=scorer,
             )
     new_cfg = with_layout(cfg, result.positions_m)
     analysis = analyse_scenario(new_cfg)

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import cast
 
-import numpy as np
 import typer
 
+from lrp_gym.commands._cluster import check_ray_options, ray_option, resume_option
 from lrp_gym.commands._common import (
     FIDELITIES,
     check_distinct,
@@ -32,90 +31,12 @@ from lrp_gym.commands._common import (
     write_json,
     wrote,
 )
+from lrp_gym.commands._reproduce_plot import plot_errors
 from lrp_gym.config import ScenarioConfig, deep_merge
 from lrp_gym.errors import InputError
-from lrp_gym.experiments.reproduce import PAPER, Reproduction, reproduce
+from lrp_gym.experiments.reproduce import PAPER, reproduce
 
 ESTIMATORS = ("cluster", "best_k")
-FLOOR_M = 1e-3  # log axis: an exact hit is drawn at 1 mm
-
-
-def plot_errors(result: Reproduction, title: str = ""):
-    """Per-position errors on a log axis: ours (median, whiskers min..max over the runs) and
-    the paper's published values (LUT failures, AMCL mean, AMCL convergence)."""
-    import matplotlib.pyplot as plt
-
-    pos = np.arange(1, result.lut_errors_m.shape[1] + 1)
-    fig, ax = plt.subplots(figsize=(7.5, 4))
-    _draw_our_errors(ax, result, pos)
-    _draw_paper_values(ax)
-    _style_error_axes(ax, pos, title)
-    return fig
-
-
-def _draw_our_errors(ax, result: Reproduction, pos: np.ndarray) -> None:
-    """Each localiser's errors per position: median marker, whiskers from min to max run."""
-    runs = len(result.amcl_errors_m)
-    series = [
-        (result.lut_errors_m, "s", "tab:orange", -0.12, "look-up table"),
-        (result.amcl_errors_m, "o-", "tab:blue", 0.12, "AMCL"),
-    ]
-    if result.grid_errors_m is not None:
-        series.append((result.grid_errors_m, "^--", "tab:green", 0.0, "grid filter"))
-    for errors, fmt, color, dx, label in series:
-        e = np.maximum(errors, FLOOR_M)
-        mid, lo, hi = np.median(e, 0), e.min(0), e.max(0)
-        ax.errorbar(
-            pos + dx,
-            mid,
-            yerr=np.vstack([mid - lo, hi - mid]),
-            fmt=fmt,
-            color=color,
-            capsize=3,
-            ms=5,
-            label=f"{label}: median, bars min–max ({runs} runs)",
-        )
-
-
-def _draw_paper_values(ax) -> None:
-    """The paper's published figures: LUT failures, AMCL mean error, AMCL convergence."""
-    fail = cast(dict[int, float], PAPER["lut_failures_m"])
-    ax.plot(
-        list(fail),
-        list(fail.values()),
-        "x",
-        color="tab:red",
-        ms=9,
-        mew=2,
-        label="paper: look-up table failures",
-    )
-    ax.axhline(
-        cast(float, PAPER["amcl_mean_error_m"]),
-        color="tab:blue",
-        ls="--",
-        lw=1,
-        label=f"paper: AMCL mean error {PAPER['amcl_mean_error_m']} m",
-    )
-    ax.axvline(
-        cast(float, PAPER["amcl_converged_after"]),
-        color="grey",
-        ls=":",
-        lw=1,
-        label=f"paper: AMCL converged at position {PAPER['amcl_converged_after']}",
-    )
-
-
-def _style_error_axes(ax, pos: np.ndarray, title: str) -> None:
-    """Log error axis from just under the 1 mm floor, one tick per position, legend outside."""
-    ax.set_yscale("log")
-    ax.set_ylim(FLOOR_M * 0.8, None)
-    ax.set_xlabel("position on the path")
-    ax.set_ylabel("position error [m] (log scale)")
-    ax.set_xticks(pos)
-    ax.grid(True, which="both", alpha=0.25)
-    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    if title:
-        ax.set_title(title, fontsize=10)
 
 
 def reproduce_paper(
@@ -149,6 +70,8 @@ def reproduce_paper(
         "models on the same detections and odometry; slow.",
     ),
     sets: list[str] = sets_option(),
+    ray: str | None = ray_option("the runs (with --random-rooms: the rooms), one a task,"),
+    resume: bool = resume_option(),
     out: str | None = out_option("the results as JSON"),
     plot: str | None = plot_option("the error figure"),
     force: bool = force_option(),
@@ -166,6 +89,12 @@ def reproduce_paper(
     out_path, plot_path = _check_options(
         runs, fidelity, estimator, localizer, particles, out, plot, force, random_rooms
     )
+    study: dict[str, object] = dict(command="reproduce-paper", scenario=scenario, sets=sets)
+    study |= dict(fidelity=fidelity)
+    study |= dict(noise=noise, true_fingerprints=true_fingerprints, particles=particles)
+    study |= dict(estimator=estimator, localizer=localizer, random_rooms=random_rooms)
+    sidecar = check_ray_options(ray, resume, out_path, force, study | {"runs": runs, "seed": seed})
+    run = None if ray is None else {"address": ray, "sidecar": sidecar, "resume": resume}
     if random_rooms:
         if true_fingerprints or plot_path:
             raise InputError("--random-rooms: runs both fingerprint kinds and draws no --plot")
@@ -175,7 +104,7 @@ def reproduce_paper(
         if parse_sets(sets, scenario).get("localization", {}).get("method") == "grid":
             localizer = "grid"
         _random_rooms(
-            random_rooms, runs, seed, rooms_over, estimator, out_path, json_out, localizer
+            random_rooms, runs, seed, rooms_over, estimator, out_path, json_out, localizer, run
         )
         return
     cfg = _scenario_config(scenario, sets, fidelity, noise, particles)
@@ -189,10 +118,13 @@ def reproduce_paper(
         true_fingerprints=true_fingerprints,
         estimator=estimator,
         localizer=localizer,
+        runner=None if run is None else _runs_on_ray(run, _progress_printer(runs)),
     )
     data = result.to_dict() | {"noise": noise, "fidelity": cfg.radar.fidelity}
     if out_path is not None:
         write_json(data, out_path)
+    if sidecar is not None:
+        sidecar.remove()  # the result is whole: the partial results are no longer needed
     if plot_path is not None:
         noise_txt = "noise on" if noise else "noise off"
         save_figure(plot_errors(result, f"{cfg.name}, {noise_txt}, {estimator}"), plot_path)
@@ -244,6 +176,22 @@ def _scenario_config(
     if len(cfg.task.path) < 2:
         raise InputError(f"SCENARIO: {cfg.name} has no path (task.path needs 2+ waypoints)")
     return cfg
+
+
+def _runs_on_ray(run: dict, progress: Callable[[int, dict], None]) -> Callable:
+    """``reproduce``'s runner: the runs as Ray tasks (``run``: address, sidecar, resume),
+    ``progress`` as each finishes."""
+    from lrp_gym.experiments import reproduce as rp
+    from lrp_gym.experiments.cluster import run_units
+
+    def runner(task: Callable, units: list) -> list:
+        index = {key: i for i, (key, _) in enumerate(units)}
+        return run_units(
+            task, units, encode=rp.run_to_json, decode=rp.run_from_json,
+            on_result=lambda key, r: progress(index[key], rp.run_summary(r)), **run,
+        )  # fmt: skip
+
+    return runner
 
 
 def _progress_printer(runs: int) -> Callable[[int, dict], None]:
@@ -324,9 +272,11 @@ def _random_rooms(
     json_path,
     json_out: bool,
     localizer: str = "amcl",
+    run: dict | None = None,
 ) -> None:
     """``--random-rooms``: the generated-room baseline, one line per room as it finishes
-    (on stderr; with ``--json`` the summary goes to stdout as JSON instead of the table)."""
+    (on stderr; with ``--json`` the summary goes to stdout as JSON instead of the table);
+    ``run`` (address, sidecar, resume): one Ray task per room."""
     from lrp_gym.experiments.rooms import summary, sweep
 
     def progress(r) -> None:
@@ -338,18 +288,23 @@ def _random_rooms(
             highlight=False,
         )
 
-    results = sweep(
-        range(n),
-        runs=runs,
-        run_seed=seed,
-        overrides=over,
-        estimator=estimator,
-        progress=progress,
-        localizer=localizer,
-    )
+    if run is not None:
+        results = _rooms_on_ray(n, runs, seed, over, estimator, localizer, run, progress)
+    else:
+        results = sweep(
+            range(n),
+            runs=runs,
+            run_seed=seed,
+            overrides=over,
+            estimator=estimator,
+            progress=progress,
+            localizer=localizer,
+        )
     data = summary(results)
     if json_path:
         write_json(data, json_path)
+    if run is not None and run["sidecar"] is not None:
+        run["sidecar"].remove()  # the result is whole: the partial results are no longer needed
     if json_out:
         print_json(data)
         if json_path:
@@ -358,6 +313,22 @@ def _random_rooms(
     _print_rooms(results, data, runs)
     if json_path:
         wrote(json_path)
+
+
+def _rooms_on_ray(n, runs, seed, over, estimator, localizer, run, progress) -> list:
+    """The generated rooms as Ray tasks, one room each (``run``: address, sidecar, resume)."""
+    from dataclasses import asdict
+
+    from lrp_gym.experiments.cluster import run_units
+    from lrp_gym.experiments.rooms import RoomUnit, room_from_json, room_result
+
+    units = [
+        (f"room {s}", RoomUnit(s, runs, seed, over, estimator, False, localizer)) for s in range(n)
+    ]
+    return run_units(
+        room_result, units, encode=asdict, decode=room_from_json,
+        on_result=lambda _key, r: progress(r), **run,
+    )  # fmt: skip
 
 
 def _print_rooms(results: list, data: dict, runs: int) -> None:

@@ -7,6 +7,13 @@ from pathlib import Path
 import typer
 from rich import box
 
+from lrp_gym.commands._cluster import (
+    PolicyFactory,
+    check_ray_options,
+    ray_option,
+    reject_random_agent,
+    resume_option,
+)
 from lrp_gym.commands._common import (
     FIDELITIES,
     as_flags,
@@ -77,6 +84,8 @@ def robustness(
     ),
     seed: int = seed_option("Seed of the first episode of every cell."),
     num_envs: int = num_envs_option(),
+    ray: str = ray_option("each cell's episodes, 5 seeds a task,"),
+    resume: bool = resume_option(),
     out: Path = out_option("the matrix as JSON"),
     plot: Path = plot_option("heat maps (success, time localised; value and 95 % interval)"),
     force: bool = force_option(),
@@ -103,29 +112,26 @@ def robustness(
     choice(fidelity, FIDELITIES, "--fidelity")
     if seed < 0:
         raise InputError(f"--seed: must be non-negative, got {seed}")
+    reject_random_agent(agent, ray)
     out_path = check_output(out, "--out", force, (".json",))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
     check_distinct(out_path, plot_path)
+    over = overrides(scenario, sets, fidelity)
+    study = dict(command="robustness", agent=agent, model=model, env=env, task=task)
+    study |= dict(scenario=scenario, overrides=over, perturbations=names, severities=sev)
+    sidecar = check_ray_options(ray, resume, out_path, force, study | {"seed": seed})
+    run = None if ray is None else {"address": ray, "sidecar": sidecar, "resume": resume}
     with as_flags(env_id="--env", model_path="--model", agent="--agent", task="--task"):
         result = _run(
-            rb,
-            agent,
-            env,
-            names,
-            sev,
-            episodes,
-            seed,
-            task,
-            model,
-            scenario,
-            json_out,
-            overrides(scenario, sets, fidelity),
-            num_envs,
-        )
+            rb, agent, env, names, sev, episodes, seed, task, model, scenario, json_out, over,
+            num_envs, run,
+        )  # fmt: skip
     if plot_path is not None:
         save_figure(rb.plot_matrix(result), plot_path)
     if out_path is not None:
         write_json(result, out_path)
+    if sidecar is not None:
+        sidecar.remove()  # the result is whole: the partial results are no longer needed
     if json_out:
         print_json(result)
     else:
@@ -136,12 +142,10 @@ def robustness(
 
 
 def _run(
-    rb, agent, env, names, sev, episodes, seed, task, model, scenario, quiet, over, num_envs
+    rb, agent, env, names, sev, episodes, seed, task, model, scenario, quiet, over, num_envs, run
 ) -> dict:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-
-    from agents.registry import make_agent
 
     total = episodes * (1 + len(names) * len(sev))
     with Progress(
@@ -153,21 +157,31 @@ def _run(
         transient=quiet,
     ) as bar:
         job = bar.add_task("robustness", total=total)
-        result = rb.run_matrix(
-            lambda e: make_agent(agent, e, model, seed),
-            agent,
-            env,
-            names,
-            sev,
-            episodes,
-            seed,
-            task,
-            overrides=over,
-            progress=lambda label: bar.update(job, description=f"{label:<26}"),
-            on_episode=lambda: bar.advance(job),
-            scenario=scenario,
-            num_envs=num_envs,
-        )
+        policy = PolicyFactory(agent, model, seed)
+        if run is not None:
+            from lrp_gym.experiments.distributed import run_matrix_units
+
+            bar.update(job, description=f"{'robustness on Ray':<26}")
+            result = run_matrix_units(
+                policy, agent, env, names, sev, episodes, seed, task, over, scenario, num_envs,
+                on_result=lambda _key, part: bar.advance(job, len(part)), **run,
+            )  # fmt: skip
+        else:
+            result = rb.run_matrix(
+                policy,
+                agent,
+                env,
+                names,
+                sev,
+                episodes,
+                seed,
+                task,
+                overrides=over,
+                progress=lambda label: bar.update(job, description=f"{label:<26}"),
+                on_episode=lambda: bar.advance(job),
+                scenario=scenario,
+                num_envs=num_envs,
+            )
     result["env_id"] = env or ("LRPRadarNavOracle-v0" if agent == "oracle" else "LRPRadarNav-v0")
     result["fidelity"] = (over.get("radar") or {}).get("fidelity")
     result["sets"] = over

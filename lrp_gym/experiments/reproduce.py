@@ -15,6 +15,7 @@ those of a run without it.
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -244,7 +245,7 @@ def _record(out: _RunErrors, i: int, pose: np.ndarray, res: FrameResult) -> None
     out.particles[i] = est.n_particles
 
 
-def _run_summary(run: _RunErrors) -> dict:
+def run_summary(run: _RunErrors) -> dict:
     """What ``progress`` receives after a run."""
     info = {
         "lut_mean_error_m": float(run.lut.mean()),
@@ -264,6 +265,7 @@ def reproduce(
     true_fingerprints: bool = False,
     estimator: str = "best_k",
     localizer: str = "amcl",
+    runner: Callable[[Callable, list], list] | None = None,
 ) -> Reproduction:
     """Run the full chain ``runs`` times along ``cfg.task.path``.
 
@@ -286,18 +288,78 @@ def reproduce(
     localizer : {"amcl", "grid"}
         ``grid``: run the histogram filter too, on the same detections and odometry (its
         errors in ``grid_errors_m``; AMCL's are unchanged).
+    runner : callable, optional
+        ``runner(run_unit, [(key, RunUnit), ...])`` returns the runs' results in order (e.g.
+        :func:`lrp_gym.experiments.cluster.run_units` on Ray; ``progress`` is then its job).
     """
     if localizer not in ("amcl", "grid"):
         raise ValueError(f"localizer must be amcl or grid, got {localizer!r}")
     if len(cfg.task.path) < 2:
         raise ValueError("the scenario has no path (task.path needs at least 2 waypoints)")
     bench = _Bench.build(cfg, estimator, true_fingerprints, localizer == "grid")
+    if runner is not None:
+        units = [
+            RunUnit(cfg, estimator, true_fingerprints, localizer, seed, runs, i)
+            for i in range(runs)
+        ]
+        results = runner(run_unit, [(f"run {i}", u) for i, u in enumerate(units)])
+        return _reproduction(bench, results, seed, estimator, localizer)
     results = []
     for run, child in enumerate(np.random.SeedSequence(seed).spawn(runs)):
         results.append(_run(bench, np.random.default_rng(child)))
         if progress is not None:
-            progress(run, _run_summary(results[-1]))
+            progress(run, run_summary(results[-1]))
     return _reproduction(bench, results, seed, estimator, localizer)
+
+
+@dataclass(frozen=True)
+class RunUnit:
+    """Run ``run`` of ``runs`` of :func:`reproduce`: a unit of work on its own, seeded by the
+    ``run``-th child of ``SeedSequence(seed)`` as in the one-process loop."""
+
+    cfg: ScenarioConfig
+    estimator: str
+    true_fingerprints: bool
+    localizer: str
+    seed: int
+    runs: int
+    run: int
+
+
+_BENCHES: dict[str, _Bench] = {}  # a worker builds the world and table once per scenario
+
+
+def run_unit(u: RunUnit) -> _RunErrors:
+    """One run of :func:`reproduce` (a Ray task; the bench is cached in the worker)."""
+    key = json.dumps([u.cfg.to_dict(), u.estimator, u.true_fingerprints, u.localizer], default=str)
+    if key not in _BENCHES:
+        _BENCHES.clear()
+        _BENCHES[key] = _Bench.build(u.cfg, u.estimator, u.true_fingerprints, u.localizer == "grid")
+    child = np.random.SeedSequence(u.seed).spawn(u.runs)[u.run]
+    return _run(_BENCHES[key], np.random.default_rng(child))
+
+
+def run_to_json(r: _RunErrors) -> dict:
+    """One run's errors as JSON values (exact floats)."""
+    return {
+        "lut": r.lut.tolist(),
+        "amcl": r.amcl.tolist(),
+        "grid": None if r.grid is None else r.grid.tolist(),
+        "particles": r.particles.tolist(),
+        "timing_s": dict(r.timing_s),
+    }
+
+
+def run_from_json(d: dict) -> _RunErrors:
+    """The inverse of :func:`run_to_json`."""
+    grid = None if d["grid"] is None else np.asarray(d["grid"], dtype=float)
+    return _RunErrors(
+        np.asarray(d["lut"], dtype=float),
+        np.asarray(d["amcl"], dtype=float),
+        grid,
+        np.asarray(d["particles"], dtype=int),
+        dict(d["timing_s"]),
+    )
 
 
 def _reproduction(

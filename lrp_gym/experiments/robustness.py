@@ -108,6 +108,18 @@ def run_cell(
     results = episode_results(
         env, policy, seeds, num_envs, None if on_episode is None else lambda _: on_episode()
     )
+    return cell_from_results(name, severity, results, seed, rng)
+
+
+def cell_from_results(
+    name: str,
+    severity: float,
+    results: Sequence[EpisodeResult],
+    seed: int,
+    rng: np.random.Generator | None = None,
+) -> dict[str, Any]:
+    """One cell's numbers from its episodes in seed order (the bootstrap seeded with ``seed``
+    unless ``rng`` is given): what :func:`run_cell` returns, wherever the episodes ran."""
     recov: list[int | None] = [
         recovery_frames(r.loc_error_m, r.kidnap_frame)
         for r in results
@@ -252,14 +264,12 @@ def run_matrix(
         ``{"agent", "env_id", "task", "episodes", "seed", "cells": [...]}``.
     """
     _check(perturbations, severities, episodes)
-    scenario, overrides = _scenario_and_task(task, scenario, overrides)
-    cells_spec = [(BASELINE, 0.0)] + [(p, s) for p in perturbations for s in severities]
+    scenario, overrides = scenario_and_task(task, scenario, overrides)
     policy = None
     cells = []
-    for name, sev in cells_spec:
+    for name, sev, cell in matrix_cells(perturbations, severities, overrides):
         if progress is not None:
-            progress(f"{name} @ {sev:g}" if name != BASELINE else "baseline")
-        cell = deep_merge(overrides or {}, cell_overrides(name, sev))
+            progress(cell_label(name, sev))
         env = make_eval_env(agent, env_id, scenario, overrides=cell or None)
         try:
             if policy is None:
@@ -273,7 +283,21 @@ def run_matrix(
     return {**head, "episodes": episodes, "seed": seed, "cells": cells}
 
 
-def _scenario_and_task(
+def matrix_cells(
+    perturbations: Sequence[str], severities: Sequence[float], overrides: dict[str, Any] | None
+) -> list[tuple[str, float, dict[str, Any]]]:
+    """The matrix's cells in order, baseline first: (perturbation, severity, the cell's
+    overrides: ``overrides`` with its perturbation)."""
+    spec = [(BASELINE, 0.0)] + [(p, float(s)) for p in perturbations for s in severities]
+    return [(n, s, deep_merge(overrides or {}, cell_overrides(n, s))) for n, s in spec]
+
+
+def cell_label(name: str, severity: float) -> str:
+    """``baseline`` or ``name @ severity`` (progress lines, unit names)."""
+    return f"{name} @ {severity:g}" if name != BASELINE else "baseline"
+
+
+def scenario_and_task(
     task: str | None, scenario: str | None, overrides: dict[str, Any] | None
 ) -> tuple[str | None, dict[str, Any] | None]:
     """The matrix's scenario (``ipin2023`` for the path task, sampled goals in the default

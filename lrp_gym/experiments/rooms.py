@@ -69,30 +69,59 @@ def sweep(
     """
     out = []
     for seed in seeds:
-        cfg = random_scenario(np.random.default_rng(seed), small=small)
-        if overrides:
-            cfg = cfg.with_overrides(overrides)
-        radar = reproduce(cfg, runs=runs, seed=run_seed, estimator=estimator, localizer=localizer)
-        true = reproduce(cfg, runs=runs, seed=run_seed, estimator=estimator, true_fingerprints=True)
-        kinds = sorted({cfg.reflectors.types[r.type].kind for r in cfg.reflectors.layout})
-        res = RoomResult(
-            seed=int(seed),
-            size_m=tuple(round(v, 2) for v in cfg.room.size),
-            obstacles=len(cfg.room.obstacles),
-            reflectors=len(cfg.reflectors.layout),
-            kinds="+".join(kinds),
-            frames=int(radar.amcl_errors_m.shape[1]),
-            amcl_radar_m=float(radar.amcl_errors_m.mean()),
-            amcl_true_m=float(true.amcl_errors_m.mean()),
-            lut_radar_m=float(radar.lut_errors_m.mean()),
-            grid_radar_m=None
-            if radar.grid_errors_m is None
-            else float(np.mean(radar.grid_errors_m)),
+        res = room_result(
+            RoomUnit(int(seed), runs, run_seed, overrides, estimator, small, localizer)
         )
         if progress is not None:
             progress(res)
         out.append(res)
     return out
+
+
+@dataclass(frozen=True)
+class RoomUnit:
+    """One room of :func:`sweep` (its arguments, for that room seed): a unit of work on its
+    own, seeded by the room seed and ``run_seed`` alone."""
+
+    seed: int
+    runs: int = 1
+    run_seed: int = 0
+    overrides: dict[str, Any] | None = None
+    estimator: str = "cluster"
+    small: bool = False
+    localizer: str = "amcl"
+
+
+def room_result(u: RoomUnit) -> RoomResult:
+    """AMCL on the room ``random_scenario(default_rng(u.seed))``, radar chain and true
+    fingerprints (one room of :func:`sweep`)."""
+    cfg = random_scenario(np.random.default_rng(u.seed), small=u.small)
+    if u.overrides:
+        cfg = cfg.with_overrides(u.overrides)
+    radar = reproduce(
+        cfg, runs=u.runs, seed=u.run_seed, estimator=u.estimator, localizer=u.localizer
+    )
+    true = reproduce(
+        cfg, runs=u.runs, seed=u.run_seed, estimator=u.estimator, true_fingerprints=True
+    )
+    kinds = sorted({cfg.reflectors.types[r.type].kind for r in cfg.reflectors.layout})
+    return RoomResult(
+        seed=int(u.seed),
+        size_m=tuple(round(v, 2) for v in cfg.room.size),
+        obstacles=len(cfg.room.obstacles),
+        reflectors=len(cfg.reflectors.layout),
+        kinds="+".join(kinds),
+        frames=int(radar.amcl_errors_m.shape[1]),
+        amcl_radar_m=float(radar.amcl_errors_m.mean()),
+        amcl_true_m=float(true.amcl_errors_m.mean()),
+        lut_radar_m=float(radar.lut_errors_m.mean()),
+        grid_radar_m=None if radar.grid_errors_m is None else float(np.mean(radar.grid_errors_m)),
+    )
+
+
+def room_from_json(d: dict[str, Any]) -> RoomResult:
+    """A :class:`RoomResult` read back from JSON (``dataclasses.asdict`` of one)."""
+    return RoomResult(**(d | {"size_m": tuple(d["size_m"])}))
 
 
 def summary(results: list[RoomResult]) -> dict[str, Any]:

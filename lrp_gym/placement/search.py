@@ -33,6 +33,8 @@ from lrp_gym.world import World
 from lrp_gym.world.room import Room
 
 Progress = Callable[[int, int], None]
+#: Coarse scores of candidate layouts (k, M, 2) of a problem, in their order.
+Scorer = Callable[["PlacementProblem", np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -211,17 +213,25 @@ def random_search(
     rng: np.random.Generator,
     refine_top: int = 8,
     progress: Progress | None = None,
+    scorer: Scorer | None = None,
 ) -> SearchResult:
-    """Best of ``candidates`` random feasible layouts (the paper's method)."""
+    """Best of ``candidates`` random feasible layouts (the paper's method).
+
+    All layouts are drawn first, from ``rng``; ``scorer`` (default: ``problem.score`` on each,
+    here) gives their coarse scores, e.g. in slices on a cluster: the same scores.
+    """
     if candidates < 1:
         raise ValueError(f"candidates: must be at least 1, got {candidates}")
     start = time.perf_counter()
     layouts = problem.sample(rng, candidates)
-    scores = np.empty(candidates)
-    for k, xy in enumerate(layouts):
-        scores[k] = problem.score(xy)
-        if progress is not None:
-            progress(k + 1, candidates)
+    if scorer is not None:
+        scores = np.asarray(scorer(problem, layouts), dtype=float)
+    else:
+        scores = np.empty(candidates)
+        for k, xy in enumerate(layouts):
+            scores[k] = problem.score(xy)
+            if progress is not None:
+                progress(k + 1, candidates)
     best, fine, refined = _refine(problem, layouts, scores, refine_top)
     return SearchResult(
         "random",
@@ -328,11 +338,15 @@ def search_layout(
     seed: int,
     refine_top: int = 8,
     progress: Progress | None = None,
+    scorer: Scorer | None = None,
 ) -> SearchResult:
-    """Run ``method`` (``"random"`` or ``"optimize"``) with a Generator seeded by ``seed``."""
+    """Run ``method`` (``"random"`` or ``"optimize"``) with a Generator seeded by ``seed``;
+    ``scorer`` scores the random search's candidates (see :func:`random_search`)."""
     rng = np.random.default_rng(seed)
     if method == "random":
-        return random_search(problem, candidates, rng, refine_top, progress)
+        return random_search(problem, candidates, rng, refine_top, progress, scorer)
+    if scorer is not None:
+        raise ValueError("scorer: only the random search scores its candidates independently")
     if method == "optimize":
         return optimise_search(problem, candidates, rng, refine_top, progress)
     raise ValueError(f"method: unknown {method!r}; choose random or optimize")

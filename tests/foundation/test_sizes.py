@@ -20,6 +20,7 @@ ALLOWED: dict[str, str] = {
     "lrp_gym/commands/radar.py::radar": "typer command: the signature is its option table (one Annotated parameter per flag)",
     "lrp_gym/commands/reproduce_paper.py::reproduce_paper": "typer command: the signature is its option table (one Annotated parameter per flag) (43 signature lines, body 40)",
     "lrp_gym/commands/robustness.py::robustness": "typer command: the signature is its option table (one Annotated parameter per flag); body near 40",
+    "lrp_gym/commands/sweep.py::sweep": "typer command: the signature is its option table (one Annotated parameter per flag) (45 signature lines, body ~30)",
     "lrp_gym/commands/train.py::train": "typer command: the signature is its option table (one Annotated parameter per flag) (53 signature lines, body ~30)",
     "lrp_gym/experiments/robustness.py::run_matrix": "14 parameters and their numpydoc are 44 lines; the body is ~20",
     "lrp_gym/tracking/tracker.py::LrpTracker.update": "numpydoc of the tracker's main entry is 40 lines; the body is ~35",
