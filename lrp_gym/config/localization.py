@@ -181,7 +181,8 @@ class LocalizationConfig(Strict):
         description="while the estimate is converged, the lost test quiet, no recovery under "
         "way and the cloud's likelihood close to the last best grid cell, evaluate the lost "
         "test's map-wide grid (the largest per-frame cost) only every this many frames; "
-        "1 (default): every frame; 4 measured equal on the trust rows, docs/vector.md",
+        "1 (default): every frame; 4 keeps the trust rows but lets kidnaps go unnoticed "
+        "longer (docs/vector.md)",
     )
     resample_ess_ratio: Fraction = 0.5
     alpha_slow: Fraction = 0.02
