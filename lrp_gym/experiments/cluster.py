@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -23,6 +24,8 @@ import lrp_gym
 
 #: The hint every "Ray is missing" message gives.
 INSTALL_HINT = "pip install lrp-gym[cluster]"
+#: Seconds to wait for a cluster's address to answer before giving up.
+PROBE_TIMEOUT_S = 5.0
 #: The address that starts a Ray on this machine (Ray's own name for it).
 LOCAL = "local"
 #: Object store of a Ray started here: small, the units return a few MB at most.
@@ -55,6 +58,17 @@ def check_address(address: str) -> str:
     )
 
 
+def probe(address: str, timeout_s: float = PROBE_TIMEOUT_S) -> None:
+    """Fail fast when nothing listens at ``HOST:PORT`` (``ray://`` included): ``ray.init``
+    retries an unreachable cluster for minutes. ValueError naming ``address``."""
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s).close()
+    except (OSError, ValueError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise ValueError(f"address: no Ray cluster answers at {address!r} ({reason})") from None
+
+
 def project_root() -> Path:
     """The folder that holds the ``lrp_gym`` package (a checkout's root, or site-packages)."""
     return Path(lrp_gym.__file__).resolve().parent.parent
@@ -71,6 +85,8 @@ def connect(address: str, num_cpus: int | None = None) -> Any:
     ray = import_ray()
     if ray.is_initialized():
         return ray
+    if address not in (LOCAL, "auto"):
+        probe(address)
     path = os.pathsep.join(p for p in (str(project_root()), os.environ.get("PYTHONPATH")) if p)
     kwargs: dict[str, Any] = {
         "runtime_env": {"env_vars": {"PYTHONPATH": path}},

@@ -11,11 +11,10 @@ from __future__ import annotations
 import itertools
 
 import numpy as np
+from scipy.optimize import least_squares
 
-#: Gauss-Newton refinements after the linear start.
-_REFINE_STEPS = 8
-#: ... and when refining a known point.
-_REFIT_STEPS = 3
+#: Residual evaluations of one fit, at most.
+_MAX_EVALUATIONS = 50
 
 
 def fit_point(
@@ -42,7 +41,7 @@ def fit_point(
     Notes
     -----
     ``r^2 - |p|^2 = -2 p.q + (|q|^2 + h^2)`` is linear in ``(q, c = |q|^2 + h^2)``: a linear
-    least-squares start, then Gauss-Newton on the distances themselves.
+    least-squares start, then ``scipy.optimize.least_squares`` on the distances themselves.
     """
     p = np.asarray(radar_xy, dtype=float)
     r = np.asarray(ranges_m, dtype=float)
@@ -53,18 +52,17 @@ def fit_point(
         x = np.array([*q, float(np.sqrt(max(sol[2] - q @ q, 1e-4)))])
     else:
         x = np.asarray(start, dtype=float).copy()
-    for _ in range(_REFINE_STEPS if start is None else _REFIT_STEPS):
-        d = np.column_stack([x[0] - p[:, 0], x[1] - p[:, 1], np.full(len(p), x[2])])
-        pred = np.maximum(np.linalg.norm(d, axis=1), 1e-9)
-        jac = d / pred[:, None]
-        try:
-            step = np.linalg.solve(jac.T @ jac, jac.T @ (r - pred))
-        except np.linalg.LinAlgError:  # degenerate geometry: keep the last point
-            break
-        x = x + step
-        x[2] = abs(x[2])
-        if np.max(np.abs(step)) < 1e-6:
-            break
+
+    def residuals(v: np.ndarray) -> np.ndarray:
+        return np.sqrt((v[0] - p[:, 0]) ** 2 + (v[1] - p[:, 1]) ** 2 + v[2] ** 2) - r
+
+    def jacobian(v: np.ndarray) -> np.ndarray:
+        d = np.column_stack([v[0] - p[:, 0], v[1] - p[:, 1], np.full(len(p), v[2])])
+        return d / np.maximum(np.linalg.norm(d, axis=1), 1e-9)[:, None]
+
+    # Levenberg-Marquardt (a start near the answer: the linear solution or the last fit).
+    x = least_squares(residuals, x, jac=jacobian, method="lm", max_nfev=_MAX_EVALUATIONS).x
+    x[2] = abs(x[2])  # a point and its mirror image in the radar's plane are the same
     pred = np.sqrt((x[0] - p[:, 0]) ** 2 + (x[1] - p[:, 1]) ** 2 + x[2] ** 2)
     return x, float(np.sqrt(np.mean((r - pred) ** 2)))
 

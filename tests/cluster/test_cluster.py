@@ -4,8 +4,10 @@
 from __future__ import annotations
 
 import json
+import socket
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -74,6 +76,23 @@ def test_bad_address_and_resume_without_ray(capsys):
     assert code == 2 and err.startswith("error: --resume:") and "--ray" in err
     code, _, err = run(capsys, "layout", "--ray", "--method", "optimize")
     assert code == 2 and err.startswith("error: --ray:") and "random" in err
+
+
+def test_an_address_nothing_answers_at_fails_fast(capsys):
+    """ray.init retries an unreachable cluster for minutes; the CLI says so at once (a
+    loopback port that was just freed, so nothing listens there)."""
+    pytest.importorskip("ray")  # the CLI checks that the extra is there first
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    start = time.monotonic()
+    with pytest.raises(ValueError, match=r"address: no Ray cluster answers at '127\.0\.0\.1:"):
+        cluster.probe(f"127.0.0.1:{port}")
+    with pytest.raises(SystemExit) as exc:
+        main(["evaluate", "--episodes", "1", "--ray", f"127.0.0.1:{port}"])
+    assert exc.value.code == 2
+    assert "error: --ray: no Ray cluster answers" in capsys.readouterr().err
+    assert time.monotonic() - start < 2 * cluster.PROBE_TIMEOUT_S
 
 
 def test_episode_results_survive_the_sidecar_exactly():
