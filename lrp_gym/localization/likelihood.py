@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from lrp_gym.localization.likelihood_terms import log_likelihood_terms
+from lrp_gym.localization.likelihood_terms import clutter_velocity_density, log_likelihood_terms
 from lrp_gym.localization.map_returns import MapReturns
 from lrp_gym.localization.sorting import sort_rows_inplace, sort_rows_paired_inplace
 from lrp_gym.tracking.fingerprint import Fingerprint
@@ -188,9 +188,14 @@ class FingerprintModel:
         map_p = 0.0 if self.map_returns is None else self.map_returns.probability
         return (1.0 - self.clutter_probability) * (1.0 - map_p)
 
-    def clutter_density_for(self, doppler: bool) -> float:
-        """Density of a clutter return: uniform in range, and in velocity with Doppler."""
-        return self.clutter_density * (self.velocity_density if doppler else 1.0)
+    def clutter_density_for(self, doppler: bool, speed_mps: float = 0.0) -> float:
+        """Density of a clutter return: uniform in range and, with Doppler, in radial velocity
+        (mostly static clutter: :func:`~lrp_gym.localization.likelihood_terms.clutter_velocity_density`)."""
+        if not doppler:
+            return self.clutter_density
+        return self.clutter_density * clutter_velocity_density(
+            speed_mps, self.doppler_std_mps, self.velocity_density
+        )
 
     def doppler_coefficients(self) -> tuple[float, float, float]:
         """(a, b, c) of the Doppler density ``a exp(c dv^2) + b``: the Gaussian of the measured

@@ -18,6 +18,28 @@ if TYPE_CHECKING:
     from lrp_gym.localization.likelihood import FingerprintModel, Segment
 
 
+#: Share of clutter returns whose radial velocity is not the robot's own motion (moving things,
+#: another radar's interference): uniform over the radar's unambiguous interval.
+MOVING_CLUTTER_SHARE = 0.1
+
+
+def clutter_velocity_density(speed_mps: float, doppler_std_mps: float, uniform: float) -> float:
+    """Density of a clutter return's radial velocity (1 / (m/s)).
+
+    Clutter is mostly static (furniture, room corners, a pillar): its radial velocity is the
+    robot's own speed projected on the line of sight, within ``+-|speed_mps|`` (widened by twice
+    the velocity noise). Only :data:`MOVING_CLUTTER_SHARE` of it spreads over the radar's whole
+    unambiguous interval (density ``uniform``). Spreading all of it there would make clutter
+    about 20 times less likely per return than any pose's match at walking speed, where every
+    radial velocity is within a few tenths of a m/s of zero: the filter then prefers whichever
+    pose calls the fewest returns clutter, a wrong one among unmapped scatterers
+    (docs/robustness.md).
+    """
+    half_width = min(abs(speed_mps) + 2.0 * doppler_std_mps, 0.5 / uniform)
+    static = 0.5 / max(half_width, 1e-6)
+    return (1.0 - MOVING_CLUTTER_SHARE) * static + MOVING_CLUTTER_SHARE * uniform
+
+
 def doppler_density(
     v: np.ndarray, expected_v: np.ndarray, coefficients: tuple[float, float, float], dtype
 ) -> np.ndarray:
@@ -41,9 +63,15 @@ class _Frame:
         self.model = model
         self.xy = xy
         self.velocity_xy = velocity_xy  # None without the Doppler term
+        # Every position moves at the robot's speed (only the heading differs).
+        self.speed_mps = 0.0
+        if velocity_xy is not None and len(velocity_xy):
+            self.speed_mps = float(np.hypot(*velocity_xy[0]))
         self.dtype = dtype
         self.expected: list[np.ndarray] | None = None
         self.expected_v: list[np.ndarray] | None = None
+        # Per type index: each reflector's best kernel against its own type's distances.
+        self.matched: dict[int, np.ndarray] = {}
         self.extra = self.extra_v = None
         if map_returns is not None:  # (ranges, rates), rates given iff velocity_xy is
             self.extra = map_returns[0].astype(dtype, copy=False)
@@ -87,6 +115,8 @@ def log_likelihood_terms(
     out = np.zeros(xy.shape[0])
     for seg in segments:
         out += _segment_term(frame, seg)
+    if model.detection_probability > 0.0 and model.clutter_probability > 0.0:
+        out += _missed_term(frame, segments)
     return out
 
 
@@ -121,7 +151,7 @@ def _segment_term(frame: _Frame, seg: Segment) -> np.ndarray:
         mix = np.logaddexp.reduce(r, axis=1) + ln_scale - dtype(np.log(m))
         return mix.sum(axis=0, dtype=np.float64)
     np.exp(r, out=r)
-    out = _missed_term(r, model.detection_probability, dtype)
+    frame.matched[seg.type_index] = r.max(axis=0)  # for the missed-reflector term
     if dens_v is not None:
         r *= dens_v
     g = r.mean(axis=1)  # (n, N)
@@ -138,26 +168,50 @@ def _segment_term(frame: _Frame, seg: Segment) -> np.ndarray:
             model.doppler_coefficients(),
             model.use_numba,
         )
-    log_mix = _log_mixture(g, log_norm, c, model.clutter_density_for(dens_v is not None), dtype)
+    log_mix = _log_mixture(
+        g, log_norm, c, model.clutter_density_for(dens_v is not None, frame.speed_mps), dtype
+    )
     if log_sorted is None:
-        return out + log_mix
+        return log_mix
     # All n distances are reflectors with probability (1 - c)^n: sorted assignment;
     # otherwise at least one is clutter (and one reflector missed): the mixture.
     p_clean = model.clean_probability**n
-    return out + np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
+    return np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
 
 
-def _missed_term(kernel: np.ndarray, detection_probability: float, dtype) -> np.ndarray | float:
+def _missed_term(frame: _Frame, segments: list[Segment]) -> np.ndarray:
     """Negative information (N,): a reflector that no measured distance matches was missed,
-    which a pose that predicts it visible explains with ``1 - P_D`` only. ``kernel`` (n, m, N)
-    holds ``exp(-r^2 / (2 s^2))`` of each distance and reflector; 0 without the term."""
-    if detection_probability <= 0.0:
-        return 0.0
-    p_d = dtype(detection_probability)
-    matched = kernel.max(axis=0)  # (m, N): kernel of each reflector's best match
-    matched *= p_d
-    matched += dtype(1.0) - p_d
-    return np.log(matched).sum(axis=0, dtype=np.float64)
+    which a pose that predicts it visible explains with ``1 - P_D`` only.
+
+    A reflector counts as matched by a distance of *any* type (``exp(-r^2 / (2 s^2))`` of its
+    best match): a weak return's RCS estimate often falls in another type's window, and a
+    per-type match would then hold the miss against the true pose on every such frame (the
+    2 + 2 layout's small reflector; the reflector monitor pools the types for the same
+    reason). Types without reflectors in the layout are skipped.
+    """
+    model, dtype = frame.model, frame.dtype
+    out = np.zeros(frame.xy.shape[0])
+    p_d = dtype(model.detection_probability)
+    for t, count in enumerate(model.counts):
+        if count == 0:
+            continue
+        e = frame.expected_of(t)[0]  # (m, N)
+        matched = frame.matched.get(t)
+        for seg in segments:
+            if seg.type_index == t and matched is not None:
+                continue  # the segment's own kernel, kept by _segment_term
+            r = e[None, :, :] - seg.z.astype(dtype)[:, None, None]
+            r *= r
+            r *= (-0.5 / seg.s2).astype(dtype)[:, None, None]
+            best = np.exp(r.max(axis=0))  # exp is monotone: the largest kernel
+            matched = best if matched is None else np.maximum(matched, best, out=matched)
+        if matched is None:  # no distance at all: every reflector of the type missed
+            out += count * np.log1p(-float(p_d))
+            continue
+        matched *= p_d
+        matched += dtype(1.0) - p_d
+        out += np.log(matched).sum(axis=0, dtype=np.float64)
+    return out
 
 
 def _log_mixture(g: np.ndarray, log_norm: np.ndarray, c: float, clutter_density: float, dtype):

@@ -100,3 +100,73 @@ def test_unknown_type_is_ignored(loc_world):
         (fp.fresh[0], np.array([True])),
     )
     np.testing.assert_allclose(model.log_likelihood(xy, more), model.log_likelihood(xy, fp))
+
+
+def _two_type_world():
+    from lrp_gym.config import load_scenario
+    from lrp_gym.world import World
+
+    return World.from_config(load_scenario("ipin2023-2types"))
+
+
+def _missed_only(world, xy, fp, p_d=0.8):
+    """The negative-information term alone: log L with ``p_d`` minus log L without it."""
+
+    def model(p):
+        return FingerprintModel(
+            world.layout,
+            world.mount_height_m,
+            0.075,
+            0.2,
+            world.fmcw.max_range_m,
+            detection_probability=p,
+        )
+
+    return model(p_d).log_likelihood(xy, fp, np.float64) - model(0.0).log_likelihood(
+        xy, fp, np.float64
+    )
+
+
+def test_missed_reflector_costs_one_minus_detection_probability(loc_world):
+    xy = np.array([[2.0, 3.0]])
+    fp = Fingerprint.from_true(loc_world.layout, loc_world.radar_position(xy[0]))
+    np.testing.assert_allclose(_missed_only(loc_world, xy, fp), 0.0, atol=1e-9)
+    d = fp.distances_m[0]
+    gaps = np.abs(d[:, None] - d[None, :]) + np.eye(len(d)) * 9.0
+    k = int(np.argmax(gaps.min(axis=1)))  # the distance farthest from every other one
+    keep = np.arange(len(d)) != k
+    one_missed = Fingerprint(("A",), (d[keep],), (fp.variances_m2[0][keep],), (keep[keep],))
+    assert gaps[k].min() > 0.3  # the other distances cannot stand in for it
+    np.testing.assert_allclose(_missed_only(loc_world, xy, one_missed), np.log(0.2), atol=0.01)
+
+
+def test_missed_reflector_matched_by_a_distance_of_another_type():
+    # A small reflector's weak return often gets the other type's RCS label: the true pose
+    # must not pay for that as if the reflector were missing.
+    world = _two_type_world()
+    xy = np.array([[2.2, 2.6]])
+    fp = Fingerprint.from_true(world.layout, world.radar_position(xy[0]))
+    assert len(fp.type_names) == 2 and all(len(d) for d in fp.distances_m)
+    (d_a, d_b), (v_a, v_b) = fp.distances_m, fp.variances_m2
+    relabelled = Fingerprint(
+        fp.type_names,
+        (np.r_[d_a, d_b[:1]], d_b[1:]),
+        (np.r_[v_a, v_b[:1]], v_b[1:]),
+        (np.ones(len(d_a) + 1, bool), np.ones(len(d_b) - 1, bool)),
+    )
+    np.testing.assert_allclose(_missed_only(world, xy, relabelled), 0.0, atol=1e-6)
+
+
+@pytest.mark.parametrize("speed", [0.0, 0.3, 1.0, 2.0, 10.0])
+def test_clutter_velocity_density_is_a_density_over_the_unambiguous_interval(speed):
+    from lrp_gym.localization.likelihood_terms import clutter_velocity_density
+
+    v_max, std = 5.0, 0.15
+    uniform = 0.5 / v_max
+    density = clutter_velocity_density(speed, std, uniform)
+    half = min(speed + 2 * std, v_max)
+    # Static part over +-half, moving part over +-v_max: the whole integrates to one.
+    static_mass = (density - 0.1 * uniform) * 2 * half
+    np.testing.assert_allclose(static_mass + 0.1 * uniform * 2 * v_max, 1.0)
+    if speed <= 1.0:  # at walking speed far above the uniform density over +-5 m/s
+        assert density > 3 * uniform
