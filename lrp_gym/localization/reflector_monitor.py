@@ -38,10 +38,6 @@ from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
 
-#: Frames a pair of reflectors must have fixed the pose error in before its corrected residual
-#: counts (see ReflectorMonitor._bias_m).
-_PAIR_MIN_FRAMES = 3
-
 
 @dataclass
 class ReflectorMonitor:
@@ -64,19 +60,12 @@ class ReflectorMonitor:
         m = len(self.world.layout)
         self.miss_share = np.zeros(m)
         self.mean_residual_m = np.zeros(m)
-        # Every pair of reflectors that can fix the estimate's position error (see
-        # _pose_corrected), and each reflector's mean residual corrected by each pair.
-        self._pairs = np.array([(a, b) for a in range(m) for b in range(a + 1, m)], dtype=int)
-        self.pair_residual_m = np.full((m, len(self._pairs)), np.nan)
-        self._pair_frames = np.zeros((m, len(self._pairs)), dtype=np.int64)
         self.visible_frames = np.zeros(m, dtype=np.int64)
         self.suspect = np.zeros(m, dtype=bool)
 
     def reset(self) -> None:
         self.miss_share[:] = 0.0
         self.mean_residual_m[:] = 0.0
-        self.pair_residual_m[:] = np.nan
-        self._pair_frames[:] = 0
         self.visible_frames[:] = 0
         self.suspect[:] = False
 
@@ -138,68 +127,12 @@ class ReflectorMonitor:
         alpha = 1.0 / np.clip(self.visible_frames, 1, self.cfg.window_frames)
         self.miss_share[seen] += alpha[seen] * (missed[seen] - self.miss_share[seen])
         self.mean_residual_m[near] += alpha[near] * (residual[near] - self.mean_residual_m[near])
-        self._update_pair_residuals(estimate.pose[:2], predicted, residual, near)
         before = self.suspect.copy()
         ready = self.visible_frames >= self.cfg.min_visible_frames
-        biased = self._bias_m() >= self.cfg.bias_m
+        biased = np.abs(self.mean_residual_m) >= self.cfg.bias_m
         self.suspect |= ready & ((self.miss_share >= self.cfg.suspect_share) | biased)
         self.suspect &= (self.miss_share > self.cfg.clear_share) | biased
         return bool(np.any(before != self.suspect))
-
-    def _update_pair_residuals(
-        self,
-        xy: np.ndarray,
-        predicted: np.ndarray,
-        residual: np.ndarray,
-        near: np.ndarray,
-    ) -> None:
-        """Running means of each reflector's residual less the estimate's position error as
-        each pair of *other* reflectors fixes it.
-
-        A few centimetres of pose error shift every residual by the error's projection on the
-        line of sight, for as long as the error lasts, and read as one reflector's bias. Two
-        reflectors fix the error (linearised, exactly); a pair without the moved reflector
-        fixes it right, so a reflector is biased only if no pair explains its residual away
-        (:meth:`_bias_m`), and a moved reflector cannot explain itself away.
-        """
-        if len(self._pairs) == 0:
-            return
-        # d(distance) / d(x, y) at the estimate: the horizontal line of sight over the range.
-        g = (np.asarray(xy)[None, :] - self.world.layout.positions_m[:, :2]) / predicted[:, None]
-        a, b = self._pairs[:, 0], self._pairs[:, 1]
-        det = g[a, 0] * g[b, 1] - g[a, 1] * g[b, 0]
-        # Pairs whose lines of sight are within ~15 degrees of each other fix nothing.
-        ok = near[a] & near[b] & (np.abs(det) >= 0.25 * np.hypot(*g[a].T) * np.hypot(*g[b].T))
-        if not ok.any():
-            return
-        a, b, det = a[ok], b[ok], det[ok]
-        # Cramer's rule for grad[[a, b]] @ shift = residual[[a, b]].
-        sx = (residual[a] * g[b, 1] - residual[b] * g[a, 1]) / det
-        sy = (g[a, 0] * residual[b] - g[b, 0] * residual[a]) / det
-        corrected = residual[:, None] - (g[:, 0:1] * sx[None, :] + g[:, 1:2] * sy[None, :])
-        rows = np.flatnonzero(near)
-        cell = np.ix_(rows, np.flatnonzero(ok))
-        own = (rows[:, None] == a[None, :]) | (rows[:, None] == b[None, :])
-        frames = self._pair_frames[cell] + ~own
-        self._pair_frames[cell] = frames
-        # The reflectors' running mean, then EWMA, per (reflector, pair).
-        alpha = 1.0 / np.clip(frames, 1, self.cfg.window_frames)
-        mean = np.nan_to_num(self.pair_residual_m[cell])
-        mean += alpha * (corrected[rows] - mean)
-        self.pair_residual_m[cell] = np.where(own, np.nan, mean)
-
-    def _bias_m(self) -> np.ndarray:
-        """Per reflector, the smallest mean residual any pair of other reflectors leaves over
-        :data:`_PAIR_MIN_FRAMES` or more frames (:meth:`_update_pair_residuals`), 0 until one
-        has; the plain mean residual in a layout of fewer than three reflectors."""
-        # Any pair seen a few times: one that started late must not leave the verdict to a
-        # pair holding the moved reflector (the least residual is the conservative one).
-        settled = np.where(self._pair_frames >= _PAIR_MIN_FRAMES, self.pair_residual_m, np.nan)
-        with np.errstate(all="ignore"):
-            least = np.nanmin(np.abs(settled), axis=1, initial=np.inf)
-        if len(self.world.layout) < 3:  # no pair of others to fix the pose error with
-            return np.abs(self.mean_residual_m)
-        return np.where(np.isfinite(least), least, 0.0)
 
     def _nearest_residuals(self, predicted: np.ndarray, gated: Fingerprint) -> np.ndarray:
         """Per reflector, the nearest reflector-like measured distance minus the predicted
