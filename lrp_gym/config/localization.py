@@ -31,8 +31,23 @@ class ReflectorMonitorConfig(Strict):
     )
     window_frames: Annotated[int, Field(ge=1, le=10_000)] = 30
     min_visible_frames: Annotated[int, Field(ge=1, le=10_000)] = 12
-    suspect_share: Annotated[float, Field(gt=0.0, le=1.0)] = 0.25
-    clear_share: Fraction = 0.1
+    suspect_share: Annotated[float, Field(gt=0.0, le=1.0)] = Field(
+        default=0.25,
+        description="a reflector missing in this share of its visible frames (and, by "
+        "excess_z, more often than its peers) is a suspect",
+    )
+    clear_share: Fraction = Field(
+        default=0.1,
+        description="a suspect whose miss share falls below this (or to its peers') is cleared",
+    )
+    excess_z: NonNegFloat = Field(
+        default=4.0,
+        description="a reflector is a suspect on misses only if its miss share exceeds the "
+        "other visible reflectors' in the same frames (their common miss rate) by this many "
+        "standard errors (one-sided two-proportion z-test; 0: by anything): dropped "
+        "detections or a covered radar hit every reflector alike. High because the test is "
+        "repeated every frame of an episode",
+    )
     gate_sigmas: PositiveFloat = 3.0
     bias_m: PositiveFloat = Field(
         default=0.04,

@@ -21,6 +21,17 @@ moved reflector's predicted distance still finds some return within 0.1 m in abo
 the frames; measured on the patrol, a reflector moved by 0.5 m misses the 0.1 m gate in 41 %
 of its visible frames, one in place in 2 %, hence ``suspect_share`` 0.25.
 
+A miss share alone cannot tell one reflector from a common cause: with a share of the
+detections dropped at random (or the radar covered, or interference) every reflector's miss
+share is the drop rate. So a reflector is a suspect on misses only if it also misses more
+often than its peers in the same frames: each reflector keeps, with its own running mean and
+weights, the *common share* (the mean miss of the other judged reflectors not under
+suspicion, frame by frame), and its excess over it must pass a one-sided two-proportion
+z-test at ``excess_z`` standard errors (the null: it misses at its peers' rate). A frame in
+which it is judged alone says nothing either way. The bias test is unchanged; note that with
+dropped detections a missing reflector's nearest return is a neighbour's or a ghost's, within
+twice the gate and on one side, so that test can still name a reflector under a common cause.
+
 The localiser may then leave the suspects out of its measurement model
 (``drop_suspects``): a moved reflector's returns stop pulling the estimate, and a user
 surveying the room learns which reflector to check (``info["suspect_reflectors"]``).
@@ -50,6 +61,17 @@ class ReflectorMonitor:
     cfg : ReflectorMonitorConfig
     max_range_m : float
         Farthest distance the radar reports a reflector at.
+
+    Attributes
+    ----------
+    miss_share, common_share : ndarray (M,)
+        Running means, over each reflector's judged frames, of its misses and of its peers'
+        mean miss in those frames.
+    null_var : ndarray (M,)
+        The running mean's squared weights times each frame's ``1 + 1/k`` (k peers): the
+        excess's variance over ``p (1 - p)`` if every reflector missed at one rate p.
+    mean_residual_m : ndarray (M,)
+        Running mean of the nearest return minus the prediction (within twice the gate).
     """
 
     world: World
@@ -59,12 +81,16 @@ class ReflectorMonitor:
     def __post_init__(self) -> None:
         m = len(self.world.layout)
         self.miss_share = np.zeros(m)
+        self.common_share = np.zeros(m)
+        self.null_var = np.zeros(m)
         self.mean_residual_m = np.zeros(m)
         self.visible_frames = np.zeros(m, dtype=np.int64)
         self.suspect = np.zeros(m, dtype=bool)
 
     def reset(self) -> None:
         self.miss_share[:] = 0.0
+        self.common_share[:] = 0.0
+        self.null_var[:] = 0.0
         self.mean_residual_m[:] = 0.0
         self.visible_frames[:] = 0
         self.suspect[:] = False
@@ -98,11 +124,26 @@ class ReflectorMonitor:
         whether the suspect set changed. Frames without a converged estimate are skipped.
         ``others_m``: predicted distances of other known static returns (the clutter map's
         points), which a reflector's return merges with just as with another reflector's."""
+        frame = self.observe(estimate, gated, others_m)
+        return False if frame is None else self.accumulate(*frame)
+
+    def observe(
+        self, estimate: PoseEstimate, gated: Fingerprint, others_m: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """One frame's evidence, without adding it (see :meth:`update`).
+
+        Returns
+        -------
+        (counted, residual_m) or None
+            Boolean (M,): the reflectors this frame judges (visible and resolvable), and
+            (M,) the nearest reflector-like distance minus each one's predicted distance (inf
+            without any); None when the frame judges none (or is not converged).
+        """
         if not estimate.converged:
-            return False
+            return None
         predicted, seen = self._expected(estimate.pose[:2])
         if not seen.any():
-            return False
+            return None
         # A reflector whose distance is within two range cells of another one's shares its
         # returns (the peaks merge or shift): its misses there say nothing about it.
         gap = np.abs(predicted[:, None] - predicted[None, :])
@@ -111,28 +152,67 @@ class ReflectorMonitor:
             gap = np.hstack([gap, np.abs(predicted[:, None] - np.asarray(others_m)[None, :])])
         seen &= gap.min(axis=1) >= 2.0 * self.world.fmcw.range_resolution_m
         if not seen.any():
-            return False
+            return None
+        return seen, self._nearest_residuals(predicted, gated)
+
+    def accumulate(self, seen: np.ndarray, residual: np.ndarray) -> bool:
+        """Add one frame's evidence (what :meth:`observe` returns); returns whether the
+        suspect set changed."""
+        cfg = self.cfg
         # Not widened by the estimate's covariance: that counts the particle set's tails
         # (about 6 cm when converged, while the error is 1-2 cm) and would let a moved
         # reflector's distance find a stray return in most frames.
-        gate_m = self.cfg.gate_sigmas * self.cfg.range_std_m
-        residual = self._nearest_residuals(predicted, gated)
-        missed = (np.abs(residual) > gate_m).astype(float)
+        gate_m = cfg.gate_sigmas * cfg.range_std_m
+        missed = (seen & (np.abs(residual) > gate_m)).astype(float)
         # The residual's average over the frames it is within twice the gate: a reflector
         # moved by a few gate widths still answers near its predicted distance in many frames,
         # but always on the same side.
         near = seen & (np.abs(residual) <= 2.0 * gate_m)
+        # The frame's common miss rate as each reflector sees it: the mean miss of the other
+        # judged reflectors not under suspicion (a suspect's misses are its own). Without any,
+        # the reflector's own miss stands in: the frame then says nothing for or against it.
+        peers = seen & ~self.suspect
+        k = np.count_nonzero(peers) - peers  # peers other than the reflector itself
+        others = np.divide(
+            np.sum(missed[peers]) - missed * peers, k, out=missed.copy(), where=k > 0
+        )
+        # Per-frame variance of (own miss - the others' mean) under the null hypothesis of one
+        # common miss probability p, in units of p (1 - p): 1 + 1/k, none without peers.
+        var_unit = np.where(k > 0, 1.0 + 1.0 / np.maximum(k, 1), 0.0)
         self.visible_frames[seen] += 1
-        # A running mean until 1/k falls below 1/window (bias-corrected average), then EWMA.
-        alpha = 1.0 / np.clip(self.visible_frames, 1, self.cfg.window_frames)
-        self.miss_share[seen] += alpha[seen] * (missed[seen] - self.miss_share[seen])
+        # A running mean until 1/k falls below 1/window (bias-corrected average), then EWMA;
+        # the common share and the residual follow the reflector's own frames and weights.
+        alpha = 1.0 / np.clip(self.visible_frames, 1, cfg.window_frames)
+        a = alpha[seen]
+        self.miss_share[seen] += a * (missed[seen] - self.miss_share[seen])
+        self.common_share[seen] += a * (others[seen] - self.common_share[seen])
+        self.null_var[seen] = (1.0 - a) ** 2 * self.null_var[seen] + a**2 * var_unit[seen]
         self.mean_residual_m[near] += alpha[near] * (residual[near] - self.mean_residual_m[near])
         before = self.suspect.copy()
-        ready = self.visible_frames >= self.cfg.min_visible_frames
-        biased = np.abs(self.mean_residual_m) >= self.cfg.bias_m
-        self.suspect |= ready & ((self.miss_share >= self.cfg.suspect_share) | biased)
-        self.suspect &= (self.miss_share > self.cfg.clear_share) | biased
+        ready = self.visible_frames >= cfg.min_visible_frames
+        biased = np.abs(self.mean_residual_m) >= cfg.bias_m
+        # On misses: often (suspect_share) and more often than its peers (the excess test); a
+        # suspect is cleared once it misses rarely again or no more often than its peers.
+        excess = self.miss_share - self.common_share
+        on_misses = (self.miss_share >= cfg.suspect_share) & self._excess_significant(excess)
+        self.suspect |= ready & (on_misses | biased)
+        self.suspect &= ((self.miss_share > cfg.clear_share) & (excess > 0.0)) | biased
         return bool(np.any(before != self.suspect))
+
+    def _excess_significant(self, excess: np.ndarray) -> np.ndarray:
+        """Boolean (M,): ``excess`` (miss share minus common share) is at least ``excess_z``
+        standard errors.
+
+        A one-sided two-proportion z-test on the paired running means. Under the null
+        hypothesis that a reflector misses at its peers' rate p, the excess has variance
+        ``p (1 - p) * null_var`` (``null_var``: the running mean's squared weights times each
+        frame's ``1 + 1/k``). p is the common share, not the pooled one: pooled with a moved
+        reflector's own misses it would inflate the variance of the clean room's few % and
+        delay the naming. The frames are taken as independent and the running means are
+        tested every frame, an episode long: hence ``excess_z`` 4, not 2.
+        """
+        p = self.common_share
+        return excess >= self.cfg.excess_z * np.sqrt(p * (1.0 - p) * self.null_var)
 
     def _nearest_residuals(self, predicted: np.ndarray, gated: Fingerprint) -> np.ndarray:
         """Per reflector, the nearest reflector-like measured distance minus the predicted

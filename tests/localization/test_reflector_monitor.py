@@ -33,13 +33,15 @@ def _gated(world, xy, drop=()):
     return Fingerprint.from_distances(world.layout.type_names, [d[keep]], 0.03)
 
 
-def _visible_xy(world, monitor, rng):
-    """A free position from which every reflector counts (visible and resolvable)."""
+def _visible_xy(world, monitor, rng, min_gap_m=0.0):
+    """A free position from which every reflector counts (visible and resolvable), their
+    distances at least ``min_gap_m`` apart."""
+    min_gap_m = max(min_gap_m, 2 * world.fmcw.range_resolution_m)
     for _ in range(1000):
         xy = rng.uniform(0.5, 1.0, 2) * world.room.size_m[:2] * 0.9
         d = world.layout.distances_m(world.radar_position(xy))
         gap = np.abs(d[:, None] - d[None, :]) + np.eye(len(d)) * 9
-        if monitor.visible(xy).all() and gap.min() >= 2 * world.fmcw.range_resolution_m:
+        if monitor.visible(xy).all() and gap.min() >= min_gap_m:
             return xy
     raise AssertionError("no position sees every reflector")
 
@@ -79,6 +81,78 @@ def test_a_reflector_that_answers_always_a_little_too_far_is_named(world):
         mon.update(_estimate(xy), fp)
     assert mon.miss_share.max() == 0.0
     assert mon.suspects == (1,)
+
+
+def _drops(world, mon, seed, rates, frames):
+    """Run ``frames`` frames from one position, reflector j missing with probability
+    ``rates[j]`` each frame (independently); returns the suspects of every frame.
+
+    The reflectors' distances are kept more than twice the gate apart: there a missing
+    reflector's nearest return would be a neighbour's, on one side, and the bias test (not
+    under test here) would name it.
+    """
+    rng = np.random.default_rng(seed)
+    xy = _visible_xy(world, mon, rng, min_gap_m=2.5 * CFG.gate_sigmas * CFG.range_std_m)
+    named = []
+    for _ in range(frames):
+        drop = np.flatnonzero(rng.random(len(rates)) < rates)
+        mon.update(_estimate(xy), _gated(world, xy, drop=drop))
+        named.append(mon.suspects)
+    return named
+
+
+@pytest.mark.parametrize("rate", [0.2, 0.5])
+def test_a_miss_rate_common_to_every_reflector_names_none(world, rate):
+    """Dropped detections hit all reflectors alike: each one's miss share is the drop rate,
+    above suspect_share, but no higher than its peers'. A patrol episode's length, 10 runs."""
+    for seed in range(10):
+        mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+        named = _drops(world, mon, seed, np.full(4, rate), frames=300)
+        assert set().union(*named) == set(), (seed, mon.miss_share, mon.common_share)
+        if rate > CFG.suspect_share:  # a miss share alone would name every one
+            assert mon.miss_share.min() > CFG.suspect_share
+
+
+def test_a_reflector_that_never_answers_is_named_while_its_peers_do(world):
+    for seed in range(5):
+        mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+        named = _drops(world, mon, seed, np.array([0.0, 0.0, 1.0, 0.0]), frames=40)
+        assert named[CFG.min_visible_frames - 1] == (2,)  # as soon as it may be judged
+        assert set().union(*named) == {2}
+
+
+def test_a_reflector_that_never_answers_is_named_among_peers_missing_half_the_frames(world):
+    for seed in range(5):
+        mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+        named = _drops(world, mon, seed, np.array([0.5, 0.5, 1.0, 0.5]), frames=40)
+        assert named[-1] == (2,) and set().union(*named) == {2}, seed
+
+
+def test_a_reflector_missing_far_more_often_than_its_peers_is_named(world):
+    """0.9 against a common 0.5: its own miss share (the frames its peers answer in) is 0.8."""
+    for seed in range(5):
+        mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+        named = _drops(world, mon, seed, np.array([0.5, 0.5, 0.9, 0.5]), frames=60)
+        assert named[-1] == (2,) and set().union(*named) == {2}, seed
+
+
+def test_the_common_share_leaves_out_suspects_and_frames_without_peers(world):
+    mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+    n = len(world.layout)
+    mon.suspect[3] = True
+    seen = np.ones(n, dtype=bool)
+    residual = np.array([0.0, np.inf, 0.0, np.inf])  # 1 and the suspect 3 miss
+    mon.accumulate(seen, residual)
+    # 0's peers are 1 and 2 (not the suspect 3): one of two missed; 1's peers 0 and 2: none.
+    np.testing.assert_allclose(mon.common_share, [0.5, 0.0, 0.5, 1 / 3])
+    # Alone in its frames, a reflector's own miss stands in for the common one: no evidence
+    # either way, so it is not named on misses (its bias still counts).
+    mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+    alone = np.array([True, False, False, False])
+    for _ in range(3 * CFG.min_visible_frames):
+        mon.accumulate(alone, np.full(n, np.inf))
+    assert mon.miss_share[0] == mon.common_share[0] == 1.0
+    assert mon.null_var[0] == 0.0 and mon.suspects == ()
 
 
 def test_frames_without_a_converged_estimate_are_not_judged(world):
