@@ -31,13 +31,14 @@ With Doppler (``doppler_std_mps > 0``, a fingerprint that carries radial velocit
 particles' velocity vectors), each reflector or structure term is multiplied by the density of
 the measured radial velocity ``v_i`` given the one the particle predicts for that return,
 ``(1 - q) N(v_i; u_j, s_v^2) + q / (2 v_max)`` (``q`` the Doppler outlier probability), and
-the clutter term by ``1 / (2 v_max)``. A static reflector at horizontal offset ``p_j - x`` and
-range ``e_j`` closes at ``u_j = -v . (p_j - x) / e_j``: the robot's heading enters through its
-velocity ``v``, so moving frames weigh the heading hypotheses that the distances alone cannot.
-
-The result is invariant to the order of the measured distances (they are sorted first).
-The per-term array code is in :mod:`~lrp_gym.localization.likelihood_terms`; the map's
-predicted returns are in :mod:`~lrp_gym.localization.map_returns`.
+the clutter term by the density of a mostly static scatterer's radial velocity (within the
+robot's speed). A static reflector at horizontal offset ``p_j - x`` and range ``e_j`` closes at
+``u_j = -v . (p_j - x) / e_j``: the heading enters through the velocity ``v``. With a
+``detection_probability`` ``P_D``, each mapped reflector adds ``log(P_D k_j + 1 - P_D)``,
+``k_j`` its best match's kernel among the distances of any type (negative information).
+Invariant to the order of the distances; the array code is in
+:mod:`~lrp_gym.localization.likelihood_terms`, the map's returns in
+:mod:`~lrp_gym.localization.map_returns`.
 """
 
 from __future__ import annotations

@@ -141,31 +141,36 @@ def test_global_localisation_from_a_uniform_start_on_the_two_type_layout():
         assert not np.any(np.array(conv) & (errors > 0.3))  # never confidently wrong
 
 
-def test_confidence_is_roughly_calibrated_on_the_default_task():
+def _default_task(seeds, overrides=None):
     """Pure pursuit on the default task (unknown start pose and heading, 1-type paper room,
-    detections-level radar): a few hundred seeded steps. Loose bounds: the confident steps are
-    localised, the unconfident ones less so, and a converged flag is almost never wrong."""
+    detections-level radar) over ``seeds``: per-step errors, converged flags, confidences."""
     import gymnasium as gym
 
     import lrp_gym  # noqa: F401
     from agents.pure_pursuit import PurePursuitPolicy
-    from lrp_gym.localization.metrics import trust_metrics
 
-    env = gym.make("LRPRadarNavFast-v0")
+    env = gym.make("LRPRadarNavFast-v0", overrides=overrides or {})
     policy = PurePursuitPolicy.from_env(env)
     errors, conv, conf = [], [], []
-    for seed in range(7000, 7016):
+    for seed in seeds:
         obs, _ = env.reset(seed=seed)
         done = False
         while not done:
-            action, _ = policy.predict(obs, None, np.ones(1, bool), deterministic=True)
-            obs, _, terminated, truncated, info = env.step(action)
+            obs, _, terminated, truncated, info = env.step(policy.act(obs))
             done = terminated or truncated
             errors.append(info["position_error_m"])
             conv.append(info["converged"])
             conf.append(info["localization_confidence"])
     env.close()
-    errors, conv, conf = np.array(errors), np.array(conv), np.array(conf)
+    return np.array(errors), np.array(conv), np.array(conf)
+
+
+def test_confidence_is_roughly_calibrated_on_the_default_task():
+    """A few hundred seeded steps of the default task. Loose bounds: the confident steps are
+    localised, the unconfident ones less so, and a converged flag is almost never wrong."""
+    from lrp_gym.localization.metrics import trust_metrics
+
+    errors, conv, conf = _default_task(range(7000, 7016))
     assert len(errors) >= 150
     high = conf >= 0.8
     assert high.sum() >= 50 and np.mean(errors[high] < 0.2) >= 0.8
@@ -180,27 +185,10 @@ def test_unmapped_scatterers_do_not_make_the_default_task_confidently_wrong():
     paper room: the localiser may take longer to converge, but where it says converged it is
     right. Before the clutter's velocity density, pooled negative information and the heavier
     outlier class, 70 % of the converged steps of this cell were off by more than 0.3 m."""
-    import gymnasium as gym
-
-    import lrp_gym  # noqa: F401
-    from agents.pure_pursuit import PurePursuitPolicy
     from lrp_gym.localization.metrics import trust_metrics
 
-    env = gym.make(
-        "LRPRadarNavFast-v0", overrides={"perturbations": {"clutter": {"severity": 0.5}}}
-    )
-    policy = PurePursuitPolicy.from_env(env)
-    errors, conv, conf = [], [], []
-    for seed in range(7000, 7012):
-        obs, _ = env.reset(seed=seed)
-        done = False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(policy.act(obs))
-            done = terminated or truncated
-            errors.append(info["position_error_m"])
-            conv.append(info["converged"])
-            conf.append(info["localization_confidence"])
-    env.close()
-    m = trust_metrics([np.array(errors)], [np.array(conv)], [np.array(conf)])
+    over = {"perturbations": {"clutter": {"severity": 0.5}}}
+    errors, conv, conf = _default_task(range(7000, 7012), over)
+    m = trust_metrics([errors], [conv], [conf])
     assert np.mean(conv) >= 0.3  # it does converge
     assert m["confidently_wrong_rate"] <= 0.1, m
