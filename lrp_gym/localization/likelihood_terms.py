@@ -151,7 +151,8 @@ def _segment_term(frame: _Frame, seg: Segment) -> np.ndarray:
         mix = np.logaddexp.reduce(r, axis=1) + ln_scale - dtype(np.log(m))
         return mix.sum(axis=0, dtype=np.float64)
     np.exp(r, out=r)
-    frame.matched[seg.type_index] = r.max(axis=0)  # for the missed-reflector term
+    if model.detection_probability > 0.0:  # each reflector's best match, for _missed_term
+        frame.matched[seg.type_index] = r.max(axis=0)
     if dens_v is not None:
         r *= dens_v
     g = r.mean(axis=1)  # (n, N)
