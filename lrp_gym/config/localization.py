@@ -196,6 +196,12 @@ class LocalizationConfig(Strict):
         "grows with the distances weighed (a right cloud read as lost in rooms with many "
         "reflector-like returns)",
     )
+    lost_test_clutter_probability: Fraction | None = Field(
+        default=None,
+        description="the clutter probability of the model that the lost test (and the "
+        "recovery grid) weighs with; None: clutter_probability. A heavy outlier class "
+        "shrinks a lost cloud's deficit per frame below the test's drift",
+    )
     lost_threshold_nats: PositiveFloat = 8.0
     lost_restart_nats: PositiveFloat = 20.0
     lost_test_every: Annotated[int, Field(ge=1)] = Field(

@@ -78,6 +78,7 @@ class Amcl:
         self.world = world
         self.cfg = cfg
         self.model = FingerprintModel.for_world(world, cfg)
+        self.lost_model = self.model.with_clutter_probability(cfg.lost_test_clutter_probability)
         self.motion_noise = odometry_noise(cfg)
         self.slip = slip_monitor(self.motion_noise, cfg)
         self.clearance_m = float(world.robot.radius_m)
@@ -244,13 +245,13 @@ class Amcl:
         returns = None if self._pending_global else self.model.map_returns_at(xy, fingerprint, vel)
         self._grid_loglik, self._grid_frame = None, fingerprint  # the grid: lazily for recovery
         if self.global_proposal and self._pending_global:
-            self._grid_loglik = self.grid.log_likelihood(self.model, fingerprint)
+            self._grid_loglik = self.grid.log_likelihood(self.lost_model, fingerprint)
         elif self.global_proposal:
             # lost_test_every > 1: the test (and its grid) may skip quiet frames
             marginal = self._cloud_marginal(fingerprint, w, returns)
             quiet = self._converged and self.p_random == 0.0
             if self.lost.due(quiet, marginal, fingerprint.count):
-                self._grid_loglik = self.grid.log_likelihood(self.model, fingerprint)
+                self._grid_loglik = self.grid.log_likelihood(self.lost_model, fingerprint)
                 best = float(np.max(self._grid_loglik))
                 self.lost.update_marginal(best, marginal, fingerprint.count)
                 self._pending_global = self.lost.statistic_nats >= self.cfg.lost_restart_nats
@@ -304,7 +305,7 @@ class Amcl:
         stride = max(1, len(prior_weights) // _FIT_SAMPLE)
         sub = self.particles[::stride, :2]
         ranges = None if returns is None else np.ascontiguousarray(returns[0][:, ::stride])
-        cloud_ll = self.model.log_likelihood(sub, fingerprint, map_ranges=ranges)
+        cloud_ll = self.lost_model.log_likelihood(sub, fingerprint, map_ranges=ranges)
         return self.lost.marginal(cloud_ll, prior_weights[::stride])
 
     def update_recovery(self, fingerprint: Fingerprint) -> None:
@@ -356,7 +357,7 @@ class Amcl:
         """Recovery particles: drawn from the last frame's likelihood grid (sensor resetting)
         when there is one, else uniform; headings uniform."""
         if self._grid_loglik is None and self._grid_frame is not None and self.global_proposal:
-            self._grid_loglik = self.grid.log_likelihood(self.model, self._grid_frame)
+            self._grid_loglik = self.grid.log_likelihood(self.lost_model, self._grid_frame)
         if self._grid_loglik is None:
             return self.uniform_particles(n, rng)
         xy, _ = self.grid.draw(self._grid_loglik, n, rng)
