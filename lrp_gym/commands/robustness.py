@@ -253,6 +253,7 @@ def _print(result: dict, budget: int) -> None:
         f"<= {budget}: kidnaps recovered within {budget} frames.",
         highlight=False,
     )
+    _print_stuck(result["cells"])
     for c in result["cells"]:
         if c.get("suspect_named_within_budget") is None:
             continue
@@ -262,6 +263,27 @@ def _print(result: dict, budget: int) -> None:
             f"within {SUSPECT_BUDGET_FRAMES} frames in {100 * c['suspect_named_within_budget']:.0f} "
             f"% of episodes ({100 * lo:.0f}-{100 * hi:.0f} %); another one named in "
             f"{100 * c['false_suspect_rate']:.0f} %",
+            highlight=False,
+        )
+
+
+def _print_stuck(cells: list[dict]) -> None:
+    """Per cell, the share of episodes stuck on a wrong pose: a per-episode view of ``wrong``,
+    which a few long stuck episodes dominate (cells without the key, from older JSON, are
+    left out)."""
+    from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M, STUCK_WRONG_FRAMES
+
+    parts = []
+    for c in cells:
+        if c.get("stuck_wrong_rate") is None:
+            continue
+        lo, hi = (c.get("ci95") or {}).get("stuck_wrong_rate") or (0.0, 1.0)
+        name = c["perturbation"] + ("" if c["perturbation"] == BASELINE else f" {c['severity']:g}")
+        parts.append(f"{name} {100 * c['stuck_wrong_rate']:.0f} % ({100 * lo:.0f}-{100 * hi:.0f})")
+    if parts:
+        console.print(
+            f"Episodes stuck (converged and off by > {CONFIDENTLY_WRONG_M:g} m for >= "
+            f"{STUCK_WRONG_FRAMES} frames in a row): " + "; ".join(parts),
             highlight=False,
         )
 

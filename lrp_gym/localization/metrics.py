@@ -11,6 +11,22 @@ import numpy as np
 LOCALISED_M = 0.2
 #: A converged estimate further off than this is confidently wrong (metres).
 CONFIDENTLY_WRONG_M = 0.3
+#: An episode whose estimate stays converged and wrong this many frames in a row was stuck.
+STUCK_WRONG_FRAMES = 10
+
+
+def longest_wrong_stretch(
+    errors_m: np.ndarray, converged: np.ndarray, wrong_m: float = CONFIDENTLY_WRONG_M
+) -> int:
+    """The longest run of consecutive frames that are converged and off by more than
+    ``wrong_m`` (0 if none). A per-episode view of trust: the pooled share of wrong steps is
+    dominated by the few episodes that stay stuck on a wrong pose for a hundred frames."""
+    bad = np.asarray(converged, bool) & (np.asarray(errors_m, float) > wrong_m)
+    if not bad.any():
+        return 0
+    # Run lengths from the indices where a run starts and ends.
+    edges = np.diff(np.concatenate([[0], bad.astype(np.int8), [0]]))
+    return int(np.max(np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1)))
 
 
 def frames_to_localised(errors_m: np.ndarray, localised_m: float = LOCALISED_M) -> int | None:
@@ -64,7 +80,9 @@ def trust_metrics(
         ``time_localised`` (pooled share of steps), ``mean_episode_time_localised``,
         ``median_frames_to_localised`` (episodes never localised count as their length),
         ``never_localised_rate``, ``confidently_wrong_rate`` (share of converged steps off by
-        more than :data:`CONFIDENTLY_WRONG_M`), ``converged_share`` and, with ``confidence``,
+        more than :data:`CONFIDENTLY_WRONG_M`), ``stuck_wrong_rate`` (share of episodes with
+        :data:`STUCK_WRONG_FRAMES` or more such steps in a row), ``converged_share`` and, with
+        ``confidence``,
         ``reliability`` (:func:`reliability`).
     """
     err = np.concatenate([np.asarray(e, float) for e in errors_m]) if errors_m else np.zeros(0)
@@ -83,6 +101,18 @@ def trust_metrics(
         "converged_share": float(np.mean(conv)) if conv.size else None,
         "confidently_wrong_rate": (
             float(np.mean(err[conv] > CONFIDENTLY_WRONG_M)) if conv.any() else None
+        ),
+        "stuck_wrong_rate": (
+            float(
+                np.mean(
+                    [
+                        longest_wrong_stretch(e, c) >= STUCK_WRONG_FRAMES
+                        for e, c in zip(errors_m, converged, strict=True)
+                    ]
+                )
+            )
+            if errors_m
+            else None
         ),
     }
     if confidence is not None and err.size:

@@ -1,7 +1,13 @@
 import numpy as np
 import pytest
 
-from lrp_gym.localization.metrics import frames_to_localised, reliability, trust_metrics
+from lrp_gym.localization.metrics import (
+    STUCK_WRONG_FRAMES,
+    frames_to_localised,
+    longest_wrong_stretch,
+    reliability,
+    trust_metrics,
+)
 
 
 def test_frames_to_localised_and_never():
@@ -26,3 +32,22 @@ def test_reliability_of_a_calibrated_confidence():
     errors = np.where(rng.random(20000) < conf, 0.05, 1.0)  # right with probability conf
     for row in reliability(conf, errors, bins=5):
         assert row["localised_share"] == pytest.approx(row["mean_confidence"], abs=0.03)
+
+
+def test_longest_wrong_stretch_counts_converged_wrong_frames_in_a_row():
+    err = np.array([1.0, 1.0, 1.0, 0.1, 1.0, 1.0, 0.5, 0.05])
+    conv = np.array([False, True, True, True, True, True, True, True])
+    # Frames 1-2 (then right), frames 4-6: the longest run is 3; unconverged frame 0 is not.
+    assert longest_wrong_stretch(err, conv) == 3
+    assert longest_wrong_stretch(err, np.zeros(8, bool)) == 0
+    assert longest_wrong_stretch(np.full(12, 0.31), np.ones(12, bool)) == 12
+
+
+def test_stuck_wrong_rate_is_per_episode_not_per_step():
+    n = STUCK_WRONG_FRAMES
+    stuck = (np.full(10 * n, 1.0), np.ones(10 * n, bool))  # one long wrong episode
+    brief = (np.tile([1.0, 0.1], 5 * n), np.ones(10 * n, bool))  # wrong every other frame
+    clean = (np.full(10 * n, 0.05), np.ones(10 * n, bool))
+    m = trust_metrics(*zip(stuck, brief, clean, strict=True))
+    assert m["stuck_wrong_rate"] == pytest.approx(1 / 3)
+    assert m["confidently_wrong_rate"] == pytest.approx(0.5)
