@@ -49,11 +49,34 @@ class ReflectorMonitorConfig(Strict):
         "repeated every frame of an episode",
     )
     gate_sigmas: PositiveFloat = 3.0
-    bias_m: PositiveFloat = Field(
-        default=0.04,
+    bias_m: PositiveFloat | None = Field(
+        default=None,
         description="a reflector whose nearest return is on average this far from its "
-        "predicted distance (same side) is a suspect too",
+        "predicted distance (same side) is a suspect too; None (default): off, the "
+        "displacement test does this with the pose error removed",
     )
+    displacement_chi2: PositiveFloat | None = Field(
+        default=20.0,
+        description="a reflector whose fitted displacement (parity-space test on the range "
+        "residuals, pose error removed; lrp_gym.localization.displacement_test) reaches this "
+        "chi-square (2 dof) is a suspect; None: off",
+    )
+    displacement_lead: NonNegFloat = Field(
+        default=10.0,
+        description="... and exceeds every other reflector's statistic by this (one moved "
+        "reflector spreads into the others' statistics)",
+    )
+    displacement_gate_m: PositiveFloat = Field(
+        default=0.15,
+        description="residuals within this enter the displacement test (farther ones are "
+        "another return's; the miss count covers reflectors moved farther)",
+    )
+    displacement_std_m: PositiveFloat = Field(
+        default=0.03,
+        description="std of a measured distance in the displacement test (radar range noise; "
+        "the pose error is projected out)",
+    )
+    displacement_window_frames: Annotated[int, Field(ge=2, le=100_000)] = 100
     range_std_m: PositiveFloat = Field(
         default=0.035,
         description="std of a reflector's distance from a converged estimate (radar range "

@@ -44,6 +44,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from lrp_gym.config.localization import LocalizationConfig, ReflectorMonitorConfig
+from lrp_gym.localization.displacement_test import DisplacementTest
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.tracking.fingerprint import Fingerprint
@@ -86,6 +87,10 @@ class ReflectorMonitor:
         self.mean_residual_m = np.zeros(m)
         self.visible_frames = np.zeros(m, dtype=np.int64)
         self.suspect = np.zeros(m, dtype=bool)
+        cfg = self.cfg
+        self.displacement = DisplacementTest(
+            m, cfg.displacement_std_m, cfg.displacement_gate_m, cfg.displacement_window_frames
+        )
 
     def reset(self) -> None:
         self.miss_share[:] = 0.0
@@ -94,6 +99,7 @@ class ReflectorMonitor:
         self.mean_residual_m[:] = 0.0
         self.visible_frames[:] = 0
         self.suspect[:] = False
+        self.displacement.reset()
 
     @property
     def suspects(self) -> tuple[int, ...]:
@@ -107,15 +113,21 @@ class ReflectorMonitor:
     def _expected(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Predicted distances (M,) from floor position ``xy`` and which reflectors the radar
         should see there (in range, facing it within ``min_gain``, no obstacle between)."""
+        return self._geometry(xy)[:2]
+
+    def _geometry(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_expected`, and the horizontal part (M, 2) of each unit vector from the
+        radar to the reflector: how a reflector's distance changes as it moves."""
         layout, room = self.world.layout, self.world.room
         radar = self.world.radar_position(np.asarray(xy, dtype=float))
         dist = layout.distances_m(radar)
+        bearing = (layout.positions_m[:, :2] - radar[:2]) / np.maximum(dist, 1e-9)[:, None]
         rcs_m2 = layout.effective_rcs_m2(radar)
         ok = (rcs_m2 >= self.cfg.min_gain * layout.rcs_m2) & (dist <= self.max_range_m)
         if room.obstacles:
             starts = np.broadcast_to(radar, layout.positions_m.shape)
             ok &= ~room.segments_blocked(starts, layout.positions_m)
-        return dist, ok
+        return dist, ok, bearing
 
     def update(
         self, estimate: PoseEstimate, gated: Fingerprint, others_m: np.ndarray | None = None
@@ -129,19 +141,20 @@ class ReflectorMonitor:
 
     def observe(
         self, estimate: PoseEstimate, gated: Fingerprint, others_m: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray] | None:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """One frame's evidence, without adding it (see :meth:`update`).
 
         Returns
         -------
-        (counted, residual_m) or None
-            Boolean (M,): the reflectors this frame judges (visible and resolvable), and
-            (M,) the nearest reflector-like distance minus each one's predicted distance (inf
-            without any); None when the frame judges none (or is not converged).
+        (counted, residual_m, bearing) or None
+            Boolean (M,): the reflectors this frame judges (visible and resolvable); (M,) the
+            nearest reflector-like distance minus each one's predicted distance (inf without
+            any); (M, 2) the horizontal unit bearings from the estimated radar position to the
+            reflectors. None when the frame judges none (or is not converged).
         """
         if not estimate.converged:
             return None
-        predicted, seen = self._expected(estimate.pose[:2])
+        predicted, seen, bearing = self._geometry(estimate.pose[:2])
         if not seen.any():
             return None
         # A reflector whose distance is within two range cells of another one's shares its
@@ -153,12 +166,16 @@ class ReflectorMonitor:
         seen &= gap.min(axis=1) >= 2.0 * self.world.fmcw.range_resolution_m
         if not seen.any():
             return None
-        return seen, self._nearest_residuals(predicted, gated)
+        return seen, self._nearest_residuals(predicted, gated), bearing
 
-    def accumulate(self, seen: np.ndarray, residual: np.ndarray) -> bool:
-        """Add one frame's evidence (what :meth:`observe` returns); returns whether the
-        suspect set changed."""
+    def accumulate(
+        self, seen: np.ndarray, residual: np.ndarray, bearing: np.ndarray | None = None
+    ) -> bool:
+        """Add one frame's evidence (what :meth:`observe` returns; without ``bearing`` the
+        displacement test does not see the frame); returns whether the suspect set changed."""
         cfg = self.cfg
+        if bearing is not None and cfg.displacement_chi2 is not None:
+            self.displacement.add(seen, residual, bearing)
         # Not widened by the estimate's covariance: that counts the particle set's tails
         # (about 6 cm when converged, while the error is 1-2 cm) and would let a moved
         # reflector's distance find a stray return in most frames.
@@ -190,7 +207,7 @@ class ReflectorMonitor:
         self.mean_residual_m[near] += alpha[near] * (residual[near] - self.mean_residual_m[near])
         before = self.suspect.copy()
         ready = self.visible_frames >= cfg.min_visible_frames
-        biased = np.abs(self.mean_residual_m) >= cfg.bias_m
+        biased = self._biased()
         # On misses: often (suspect_share) and more often than its peers (the excess test); a
         # suspect is cleared once it misses rarely again or no more often than its peers.
         excess = self.miss_share - self.common_share
@@ -198,6 +215,23 @@ class ReflectorMonitor:
         self.suspect |= ready & (on_misses | biased)
         self.suspect &= ((self.miss_share > cfg.clear_share) & (excess > 0.0)) | biased
         return bool(np.any(before != self.suspect))
+
+    def _biased(self) -> np.ndarray:
+        """Boolean (M,): suspects on their residuals, not their misses. The displacement test
+        names the reflector whose fitted move is significant and ahead of the others', and
+        keeps it while its statistic stays above half the threshold (hysteresis); the older
+        bias test (``bias_m``, off by default) asks for a one-sided mean residual."""
+        cfg = self.cfg
+        out = np.zeros(len(self.suspect), dtype=bool)
+        if cfg.bias_m is not None:
+            out |= np.abs(self.mean_residual_m) >= cfg.bias_m
+        if cfg.displacement_chi2 is not None:
+            test = self.displacement
+            out |= self.suspect & (test.statistic >= 0.5 * cfg.displacement_chi2)
+            j = test.leader(cfg.displacement_chi2, cfg.displacement_lead)
+            if j is not None:
+                out[j] = True
+        return out
 
     def _excess_significant(self, excess: np.ndarray) -> np.ndarray:
         """Boolean (M,): ``excess`` (miss share minus common share) is at least ``excess_z``
