@@ -44,7 +44,6 @@ Invariant to the order of the distances; the array code is in
 from __future__ import annotations
 
 import copy
-
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
