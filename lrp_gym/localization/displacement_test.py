@@ -43,8 +43,8 @@ class DisplacementTest:
     gate_m : float
         Residuals beyond this do not enter (association).
     window_frames : int
-        Exponential forgetting over about this many of a reflector's frames, so that a
-        reflector moved mid-episode (or put back) is seen as it is now.
+        Exponential forgetting over about this many frames (with three or more reflectors
+        judged), so that a reflector moved mid-episode (or put back) is seen as it is now.
 
     Attributes
     ----------
@@ -80,8 +80,10 @@ class DisplacementTest:
         proj = np.eye(len(idx)) - u @ np.linalg.solve(gram, u.T)
         parity = proj @ residual_m[idx]
         w = 1.0 / self.std_m**2
-        self.normal_m2[idx] *= self.keep
-        self.moment[idx] *= self.keep
+        # Every reflector forgets, judged in this frame or not: one left out (a suspect, or
+        # out of view) fades rather than keeping an old verdict.
+        self.normal_m2 *= self.keep
+        self.moment *= self.keep
         self.normal_m2[idx] += w * np.diag(proj)[:, None, None] * u[:, :, None] * u[:, None, :]
         self.moment[idx] += w * parity[:, None] * u
 

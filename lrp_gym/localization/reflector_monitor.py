@@ -175,7 +175,8 @@ class ReflectorMonitor:
         displacement test does not see the frame); returns whether the suspect set changed."""
         cfg = self.cfg
         if bearing is not None and cfg.displacement_chi2 is not None:
-            self.displacement.add(seen, residual, bearing)
+            # Fault exclusion: a suspect's residuals would spread into its peers' parity.
+            self.displacement.add(seen & ~self.suspect, residual, bearing)
         # Not widened by the estimate's covariance: that counts the particle set's tails
         # (about 6 cm when converged, while the error is 1-2 cm) and would let a moved
         # reflector's distance find a stray return in most frames.
