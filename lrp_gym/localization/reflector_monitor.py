@@ -10,12 +10,13 @@ the predicted distance (the radar's range noise and a converged estimate's error
 distances of any type count, because a weak return's RCS estimate scatters across the types'
 windows). The miss share (a running mean over its first ``window_frames``
 visible frames, then exponentially weighted over about that many) above ``suspect_share``,
-after at least ``min_visible_frames`` visible frames, names the reflector a suspect, and so
-does a mean residual (nearest return minus prediction, over the frames it is within twice the
-gate) of ``bias_m`` or more: a reflector moved by about one gate width still answers inside
-the gate in many frames, but always on the same side; below ``clear_share``
-clears it (hysteresis). The null case is the radar's own miss rate (about 5 % per frame for a
-visible trihedral in the paper room). The gate must be tight: a frame has about ten
+after at least ``min_visible_frames`` visible frames, names the reflector a suspect; below
+``clear_share`` clears it (hysteresis). A reflector moved by less than a few gate widths
+still answers inside or near the gate in many frames: the displacement test
+(:mod:`lrp_gym.localization.displacement_test`) fits its move to the residuals of the frames
+with the estimate's position error projected out, and names it when the fit is significant
+and ahead of every other reflector's. The null case is the radar's own miss rate (about 5 %
+per frame for a visible trihedral in the paper room). The gate must be tight: a frame has about ten
 reflector-like returns (ghosts via walls and ceiling, room corners) between 2 and 6 m, so a
 moved reflector's predicted distance still finds some return within 0.1 m in about half of
 the frames; measured on the patrol, a reflector moved by 0.5 m misses the 0.1 m gate in 41 %
@@ -28,9 +29,11 @@ often than its peers in the same frames: each reflector keeps, with its own runn
 weights, the *common share* (the mean miss of the other judged reflectors not under
 suspicion, frame by frame), and its excess over it must pass a one-sided two-proportion
 z-test at ``excess_z`` standard errors (the null: it misses at its peers' rate). A frame in
-which it is judged alone says nothing either way. The bias test is unchanged; note that with
-dropped detections a missing reflector's nearest return is a neighbour's or a ghost's, within
-twice the gate and on one side, so that test can still name a reflector under a common cause.
+which it is judged alone says nothing either way. With dropped detections a missing
+reflector's nearest return is a neighbour's or a ghost's, within twice the gate and on one
+side, so the old bias test (``bias_m``, now off by default) named
+a reflector under a common cause; the displacement test takes only residuals within its gate
+and removes the position error, which cut those false names (docs/robustness.md).
 
 The localiser may then leave the suspects out of its measurement model
 (``drop_suspects``): a moved reflector's returns stop pulling the estimate, and a user
