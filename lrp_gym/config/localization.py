@@ -225,12 +225,6 @@ class LocalizationConfig(Strict):
         "recovery grid) weighs with; None: clutter_probability. A heavy outlier class "
         "shrinks a lost cloud's deficit per frame below the test's drift",
     )
-    lost_exclusion_m: NonNegFloat = Field(
-        default=0.0,
-        description="the lost test compares the cloud with the best grid cell farther than "
-        "this (plus twice the cloud's spread) from it: whether the robot is elsewhere, not "
-        "whether the cloud lags a few cm; 0: the best cell anywhere",
-    )
     lost_threshold_nats: PositiveFloat = 8.0
     lost_restart_nats: PositiveFloat = 20.0
     lost_test_every: Annotated[int, Field(ge=1)] = Field(

@@ -252,7 +252,7 @@ class Amcl:
             quiet = self._converged and self.p_random == 0.0
             if self.lost.due(quiet, marginal, fingerprint.count):
                 self._grid_loglik = self.grid.log_likelihood(self.lost_model, fingerprint)
-                best = self._best_elsewhere(self._grid_loglik, w)
+                best = float(np.max(self._grid_loglik))
                 self.lost.update_marginal(best, marginal, fingerprint.count)
                 self._pending_global = self.lost.statistic_nats >= self.cfg.lost_restart_nats
         if self._pending_global:
@@ -296,23 +296,6 @@ class Amcl:
         )
         log_w = (loglik - cell_ll[cells]) * self.cfg.likelihood_exponent
         return np.exp(log_w - np.max(log_w))
-
-    def _best_elsewhere(self, grid_loglik: np.ndarray, w: np.ndarray) -> float:
-        """The lost test's rival: the best grid cell away from the cloud (farther than
-        ``lost_exclusion_m`` plus twice the cloud's spread from its mean). The question is
-        whether the robot is somewhere else; a cell next to a right cloud that fits a little
-        better (the cloud lags a few cm behind, and with many reflectors a few cm cost many
-        nats) says nothing about that. With no cell that far, the best of all."""
-        r = self.cfg.lost_exclusion_m
-        total = float(np.sum(w))
-        if r <= 0.0 or not total > 0.0:
-            return float(np.max(grid_loglik))
-        xy = self.particles[:, :2]
-        mean = (w / total) @ xy
-        spread = float(np.sqrt((w / total) @ np.sum((xy - mean) ** 2, axis=1)))
-        d2 = np.sum((self.grid.centres_m - mean) ** 2, axis=1)
-        far = d2 > (r + 2.0 * spread) ** 2
-        return float(np.max(grid_loglik[far] if far.any() else grid_loglik))
 
     def _cloud_marginal(
         self, fingerprint: Fingerprint, prior_weights: np.ndarray, returns
