@@ -220,10 +220,11 @@ class LocalizationConfig(Strict):
         "reflector-like returns)",
     )
     lost_test_clutter_probability: Fraction | None = Field(
-        default=None,
+        default=0.2,
         description="the clutter probability of the model that the lost test (and the "
-        "recovery grid) weighs with; None: clutter_probability. A heavy outlier class "
-        "shrinks a lost cloud's deficit per frame below the test's drift",
+        "recovery grid) weighs with; None: clutter_probability. Lighter than the weights' "
+        "outlier class: a heavy one shrinks a lost cloud's deficit per frame below the "
+        "test's drift (calibrated with 0.2), and a kidnap goes unnoticed for frames",
     )
     lost_threshold_nats: PositiveFloat = 8.0
     lost_restart_nats: PositiveFloat = 20.0

@@ -69,15 +69,20 @@ def test_a_reflector_that_stops_answering_is_named_and_cleared_when_it_returns(w
     assert mon.suspects == () and not mon.visible_frames.any()
 
 
-def test_a_reflector_that_answers_always_a_little_too_far_is_named(world):
+@pytest.mark.parametrize(
+    "cfg",
+    [CFG, ReflectorMonitorConfig(bias_m=0.04, displacement_chi2=None)],
+    ids=["displacement test", "bias test"],
+)
+def test_a_reflector_that_answers_always_a_little_too_far_is_named(world, cfg):
     """Moved by about one gate: most of its returns still pass the gate, all on one side."""
-    mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
+    mon = ReflectorMonitor(world, cfg, max_range_m=20.0)
     xy = _visible_xy(world, mon, np.random.default_rng(2))
     d = world.layout.distances_m(world.radar_position(xy))
     shifted = d.copy()
     shifted[1] += 0.06  # inside the 0.105 m gate: no miss, but a bias above bias_m
     fp = Fingerprint.from_distances(world.layout.type_names, [shifted], 0.03)
-    for _ in range(CFG.min_visible_frames + 2):
+    for _ in range(cfg.min_visible_frames + 2):
         mon.update(_estimate(xy), fp)
     assert mon.miss_share.max() == 0.0
     assert mon.suspects == (1,)
@@ -205,6 +210,20 @@ def test_a_moved_reflector_is_named_on_the_patrol_and_left_out_of_the_map():
             # The localiser weighs the three others only.
             assert sum(env.localizer.model.counts) == len(env.world.layout) - 1
     assert hits >= 4
+    assert others <= 1
+
+
+def test_a_quarter_metre_move_is_named_on_the_patrol():
+    # A 0.25 m move is often across the lines of sight: it rarely leaves the 0.1 m gate, so
+    # the miss count alone names it late or never; the displacement test adds up the frames.
+    over = {"perturbations": {"displaced_reflector": {"severity": 0.25}}}
+    hits = others = 0
+    for seed in range(6):
+        env, named = _patrol(over, seed)
+        moved = set(env.perturbations["displaced_reflector"].moved.tolist())
+        hits += bool(moved & set(named))
+        others += bool(set(named) - moved)
+    assert hits >= 5
     assert others <= 1
 
 
