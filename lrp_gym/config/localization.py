@@ -76,7 +76,11 @@ class ReflectorMonitorConfig(Strict):
         description="std of a measured distance in the displacement test (radar range noise; "
         "the pose error is projected out)",
     )
-    displacement_window_frames: Annotated[int, Field(ge=2, le=100_000)] = 100
+    displacement_window_frames: Annotated[int, Field(ge=2, le=100_000)] = Field(
+        default=50,
+        description="the displacement test forgets over about this many frames: about the "
+        "naming budget, and a longer window adds up slow, correlated noise (clutter) too",
+    )
     range_std_m: PositiveFloat = Field(
         default=0.035,
         description="std of a reflector's distance from a converged estimate (radar range "
