@@ -96,12 +96,12 @@ def _scenario(kind: str):
 @pytest.mark.parametrize("kind", ["trihedrals", "mixed", "spheres"])
 def test_ghost_kernel_equals_the_numpy_ghost_model_bit_for_bit(kind):
     """Retro-directive, omnidirectional and mixed layouts, with and without velocities, at
-    positions inside the room and beyond its walls."""
+    positions inside the room and beyond its walls, over several of the kernel's blocks."""
     world = World.from_config(_scenario(kind))
     ghosts = GhostModel(world.room, world.layout, world.mount_height_m)
     rng = np.random.default_rng(5)
     for trial in range(12):
-        xy = rng.uniform(-0.5, 5.5, (int(rng.integers(1, 800)), 2))
+        xy = rng.uniform(-0.5, 5.5, (int(rng.integers(1, 1800)), 2))
         vel = rng.normal(0.0, 0.8, xy.shape).astype(np.float32) if trial % 2 else None
         ghosts.use_numba = True
         got, got_v = ghosts.ranges(xy, vel, np.float32)
