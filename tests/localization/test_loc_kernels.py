@@ -170,7 +170,8 @@ def test_measurement_grid_caches_give_the_likelihood_computed_from_scratch():
 
 def test_structure_kernel_equals_the_numpy_structure_returns_bit_for_bit():
     """The compiled structure rows equal the numpy functions cast to float32, with and without
-    velocities, at positions inside the room, on its walls and corners, and beyond them."""
+    velocities (float64 and float32, as the particles' are), at positions inside the room, on
+    its walls and corners, and beyond them."""
     from lrp_gym.localization.map_returns import MapReturns
     from lrp_gym.world.structure import structure_ranges_m, structure_velocities_mps
 
@@ -179,11 +180,11 @@ def test_structure_kernel_equals_the_numpy_structure_returns_bit_for_bit():
     returns = MapReturns(room, world.layout, h, 0.2, 0.0)
     lx, ly, _ = room.size_m
     rng = np.random.default_rng(6)
-    for _ in range(10):
+    for trial in range(10):
         n = int(rng.integers(1, 3000))
         xy = rng.uniform(-1.0, max(lx, ly) + 1.0, (n, 2))
         xy[: min(n, 4)] = [[0.0, 0.0], [lx, ly], [0.0, ly], [lx, 0.0]][: min(n, 4)]
-        vel = rng.normal(0.0, 0.8, (n, 2))
+        vel = rng.normal(0.0, 0.8, (n, 2)).astype(np.float32 if trial % 2 else float)
         vel[: min(n, 2)] = 0.0
         want_r = structure_ranges_m(room, h, xy).astype(np.float32)
         want_v = structure_velocities_mps(room, h, xy, vel).astype(np.float32)
