@@ -3,11 +3,11 @@
 
 The numpy code builds a dozen (images x reflectors x positions) arrays per call, one pass over
 memory each; this kernel computes them for blocks of positions that stay in cache, in
-branch-free loops that the compiler vectorises, and writes the ghost rows directly. It performs the same IEEE float32
-operations in the same order as the numpy code (no ``fastmath``: no reassociation, no fused
-multiply-add), so the results are equal bit for bit; the test suite checks this on random
-positions, velocities and layouts. Without numba :meth:`GhostModel.ranges` keeps its numpy
-path.
+branch-free loops that the compiler vectorises, and writes the ghost rows directly. It
+performs the same IEEE float32 operations in the same order as the numpy code (no
+``fastmath``: no reassociation, no fused multiply-add; vector lanes round like scalars), so
+the results are equal bit for bit; the test suite checks this on random positions,
+velocities and layouts. Without numba :meth:`GhostModel.ranges` keeps its numpy path.
 """
 
 from __future__ import annotations
