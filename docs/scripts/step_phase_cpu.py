@@ -11,6 +11,9 @@ part that does not scale with the particles and cells, i.e. the most a batch cou
 ```bash
 PYTHONPATH=$PWD .venv/bin/python docs/scripts/step_phase_cpu.py --steps 600
 ```
+
+``--loc KEY=VALUE`` sets a ``localization`` setting for the default filter's run (e.g.
+``initial_particles=2000``: what a cheaper global start would buy; other trajectories).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ import time
 
 import gymnasium as gym
 import numpy as np
+import yaml
 
 import lrp_gym  # noqa: F401  (registers the ids)
 
@@ -55,8 +59,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=600)
     parser.add_argument("--fidelity", default="detections")
+    parser.add_argument("--loc", action="append", default=[], metavar="KEY=VALUE")
     args = parser.parse_args()
-    for label, loc in (("default filter", None), ("tiny filter", TINY)):
+    settings = {k: yaml.safe_load(v) for k, v in (item.split("=", 1) for item in args.loc)}
+    for label, loc in (("default filter", settings), ("tiny filter", TINY)):
         phases = phase_cpu_ms(args.fidelity, args.steps, loc)
         total = sum(sum(v) for v in phases.values())
         print(f"{label}: {args.steps / total:.1f} steps per CPU second")
