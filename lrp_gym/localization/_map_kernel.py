@@ -11,11 +11,15 @@ what makes a few dozen predicted returns per particle affordable.
 
 It does not even test them: the measured distances are sorted, so the ones within the cutoff
 of a predicted range ``e`` form a run of consecutive indices. The range axis is cut into bins
-as wide as the widest cutoff window; for each bin, the run of distances that any ``e`` in it
-could match is found once per call (:func:`candidate_windows`), and each term looks up its
-bin's run instead of scanning all ``n`` distances. The runs are a superset of the terms that
-pass the cutoff test (with a margin for rounding), the test itself is unchanged and the sums
-run in the same order, so the result is bit-identical to the full scan (tested).
+a fraction (:data:`BINS_PER_WINDOW`) of the widest cutoff window wide; for each bin, the run
+of distances that any ``e`` in it could match is found once per call
+(:func:`candidate_windows`), and each term looks up its bin's run instead of scanning all
+``n`` distances. Narrow bins make the runs hardly longer than the matches, so the cutoff test
+inside a run nearly always passes: the branches are predictable, which matters more than the
+arithmetic for particles in random order (measured: a sixth less time than window-wide bins).
+The runs are a superset of the terms that pass the cutoff test (with a margin for rounding),
+the test itself is unchanged and the sums run in the same order, so the result is
+bit-identical to the full scan, whatever the bins' width (tested).
 """
 
 from __future__ import annotations
@@ -80,27 +84,30 @@ def _density_binned(z, half_inv, extra, w, v, extra_v, dopp_a, dopp_b, dopp_c, w
 
 #: Relative margin of the candidate windows over the cutoff (float32 rounding of the test).
 _WINDOW_MARGIN = 1e-3
+#: Range bins per cutoff window (:func:`candidate_windows`): any value gives the same sums.
+BINS_PER_WINDOW = 16
 
 
 def candidate_windows(
-    z: np.ndarray, half_inv: np.ndarray
+    z: np.ndarray, half_inv: np.ndarray, bins_per_window: int = BINS_PER_WINDOW
 ) -> tuple[np.ndarray, np.ndarray, float, float]:
     """Per range bin, the run ``[first, stop)`` of the sorted distances ``z`` (n,) that a
     predicted range in the bin can match within the cutoff; the bins' origin and bins per metre.
 
-    Bin ``j`` holds ranges in ``origin + [j, j + 1) / per_m``, from one window below the
-    smallest distance to one above the largest; its run covers the distances within the widest
-    window ``max_i sqrt(CUTOFF / half_inv_i)`` (plus a margin) of the bin.
+    With ``w`` the widest window ``max_i sqrt(CUTOFF / half_inv_i)`` (plus a margin), bin ``j``
+    holds ranges in ``origin + [j, j + 1) * w / bins_per_window``, from ``w`` below the smallest
+    distance to ``w`` above the largest; its run covers the distances within ``w`` of the bin.
     """
     width = float(np.sqrt(np.max(CUTOFF / np.asarray(half_inv, dtype=float))))
     width = width * (1.0 + _WINDOW_MARGIN) + 1e-6
-    per_m = 1.0 / width
+    bin_m = width / bins_per_window
+    per_m = 1.0 / bin_m
     zf = np.asarray(z, dtype=float)
     origin = float(zf[0]) - width
-    n_bins = int(np.floor((zf[-1] - origin) * per_m)) + 2
-    lo = origin + np.arange(n_bins) * width
+    n_bins = int(np.floor((zf[-1] + width - origin) * per_m)) + 2
+    lo = origin + np.arange(n_bins) * bin_m
     first = np.searchsorted(zf, lo - width, side="left").astype(np.int64)
-    stop = np.searchsorted(zf, lo + 2.0 * width, side="right").astype(np.int64)
+    stop = np.searchsorted(zf, lo + bin_m + width, side="right").astype(np.int64)
     return first, stop, origin, per_m
 
 
@@ -162,7 +169,7 @@ def map_return_density(
             c,
         )
         if len(z) and _binned_jit is not None and bool(np.all(np.diff(z) >= 0.0)):
-            return _binned_jit(*args, candidate_windows(z, half_inv), out)
+            return _binned_jit(*args, candidate_windows(z, half_inv, BINS_PER_WINDOW), out)
         return _density_jit(*args, out)
     return _density_numpy(z, half_inv, extra, weights, v, extra_v, doppler, with_v)
 

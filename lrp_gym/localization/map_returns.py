@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from lrp_gym.localization._structure_kernel import structure_rows_jit
 from lrp_gym.localization.ghosts import GhostModel
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.room import Room
@@ -67,6 +68,9 @@ class MapReturns:
             parts.append(np.full(self.ghosts.count, self.ghost_probability / self.ghosts.count))
         #: Mixture weight (K,) of each row of :meth:`ranges`; None when there is none.
         self.weights: np.ndarray | None = np.concatenate(parts) if parts else None
+        #: Structure rows in float32 by the compiled kernel when numba is installed (the
+        #: same bits as the numpy functions).
+        self.use_numba = True
 
     @property
     def probability(self) -> float:
@@ -81,10 +85,10 @@ class MapReturns:
         None. Needs :attr:`weights` (at least one kind of return)."""
         ranges, rates = [], []
         if self.structure_probability > 0.0:
-            h = self.mount_height_m
-            ranges.append(structure_ranges_m(self.room, h, xy).astype(dtype))
-            if velocity_xy is not None:
-                rates.append(structure_velocities_mps(self.room, h, xy, velocity_xy).astype(dtype))
+            r, v = self._structure(xy, velocity_xy, dtype)
+            ranges.append(r)
+            if v is not None:
+                rates.append(v)
         if self.ghosts is not None:
             g, gv = self.ghosts.ranges(xy, velocity_xy, dtype)
             ranges.append(g)
@@ -94,3 +98,25 @@ class MapReturns:
         if velocity_xy is None:
             return r, None
         return r, (np.concatenate(rates) if len(rates) > 1 else rates[0])
+
+    def _structure(
+        self, xy: np.ndarray, velocity_xy: np.ndarray | None, dtype
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """The structure's rows (13, N) of :meth:`ranges` and, given velocities, their rates."""
+        h = self.mount_height_m
+        if np.dtype(dtype) != np.float32 or not self.use_numba or structure_rows_jit is None:
+            r = structure_ranges_m(self.room, h, xy).astype(dtype)
+            if velocity_xy is None:
+                return r, None
+            return r, structure_velocities_mps(self.room, h, xy, velocity_xy).astype(dtype)
+        xy = np.atleast_2d(np.asarray(xy, dtype=float))
+        n = xy.shape[0]
+        out = np.empty((N_STRUCTURE_RETURNS, n), dtype=np.float32)
+        v = np.zeros((0, 2))
+        rates = out[:0]
+        if velocity_xy is not None:
+            v = np.atleast_2d(np.asarray(velocity_xy, dtype=float))
+            rates = np.empty_like(out)
+        lx, ly, lz = (float(s) for s in self.room.size_m)
+        structure_rows_jit(xy, v, lx, ly, lz - h, out, rates)
+        return out, (rates if velocity_xy is not None else None)

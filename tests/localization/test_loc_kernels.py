@@ -50,11 +50,14 @@ def _full_scan(z, half_inv, extra, weights, v, ev, doppler):
     )
 
 
+@pytest.mark.parametrize("bins_per_window", [1, 3, mk.BINS_PER_WINDOW])
 @pytest.mark.parametrize("doppler", [False, True])
-def test_binned_map_kernel_equals_the_full_scan_bit_for_bit(doppler):
+def test_binned_map_kernel_equals_the_full_scan_bit_for_bit(doppler, bins_per_window, monkeypatch):
     """Looking up each predicted range's run of candidate distances gives exactly the sums of
     the scan over every distance (same terms past the cutoff, same order), including ranges
-    below the smallest distance, far beyond the largest, and right at the cutoff."""
+    below the smallest distance, far beyond the largest, and right at the cutoff, whatever
+    the bins' width."""
+    monkeypatch.setattr(mk, "BINS_PER_WINDOW", bins_per_window)
     rng = np.random.default_rng(3)
     coeffs = (2.0, 0.01, -22.0)
     n_terms = 0
@@ -93,12 +96,12 @@ def _scenario(kind: str):
 @pytest.mark.parametrize("kind", ["trihedrals", "mixed", "spheres"])
 def test_ghost_kernel_equals_the_numpy_ghost_model_bit_for_bit(kind):
     """Retro-directive, omnidirectional and mixed layouts, with and without velocities, at
-    positions inside the room and beyond its walls."""
+    positions inside the room and beyond its walls, over several of the kernel's blocks."""
     world = World.from_config(_scenario(kind))
     ghosts = GhostModel(world.room, world.layout, world.mount_height_m)
     rng = np.random.default_rng(5)
     for trial in range(12):
-        xy = rng.uniform(-0.5, 5.5, (int(rng.integers(1, 800)), 2))
+        xy = rng.uniform(-0.5, 5.5, (int(rng.integers(1, 1800)), 2))
         vel = rng.normal(0.0, 0.8, xy.shape).astype(np.float32) if trial % 2 else None
         ghosts.use_numba = True
         got, got_v = ghosts.ranges(xy, vel, np.float32)
@@ -163,3 +166,30 @@ def test_measurement_grid_caches_give_the_likelihood_computed_from_scratch():
         np.testing.assert_array_equal(
             amcl_grid.log_likelihood(model, fp), model.log_likelihood(amcl_grid.centres_m, fp)
         )
+
+
+def test_structure_kernel_equals_the_numpy_structure_returns_bit_for_bit():
+    """The compiled structure rows equal the numpy functions cast to float32, with and without
+    velocities (float64 and float32, as the particles' are), at positions inside the room, on
+    its walls and corners, and beyond them."""
+    from lrp_gym.localization.map_returns import MapReturns
+    from lrp_gym.world.structure import structure_ranges_m, structure_velocities_mps
+
+    world = World.from_config(load_scenario("ipin2023"))
+    room, h = world.room, world.mount_height_m
+    returns = MapReturns(room, world.layout, h, 0.2, 0.0)
+    lx, ly, _ = room.size_m
+    rng = np.random.default_rng(6)
+    for trial in range(10):
+        n = int(rng.integers(1, 3000))
+        xy = rng.uniform(-1.0, max(lx, ly) + 1.0, (n, 2))
+        xy[: min(n, 4)] = [[0.0, 0.0], [lx, ly], [0.0, ly], [lx, 0.0]][: min(n, 4)]
+        vel = rng.normal(0.0, 0.8, (n, 2)).astype(np.float32 if trial % 2 else float)
+        vel[: min(n, 2)] = 0.0
+        want_r = structure_ranges_m(room, h, xy).astype(np.float32)
+        want_v = structure_velocities_mps(room, h, xy, vel).astype(np.float32)
+        got_r, got_v = returns.ranges(xy, vel, np.float32)
+        got_r0, none = returns.ranges(xy, None, np.float32)
+        assert none is None
+        for got, want in ((got_r, want_r), (got_v, want_v), (got_r0, want_r)):
+            np.testing.assert_array_equal(got.view(np.uint32), want.view(np.uint32))

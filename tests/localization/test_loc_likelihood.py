@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from lrp_gym.localization.likelihood import FingerprintModel
-from lrp_gym.localization.sorting import sort_rows_inplace
+from lrp_gym.localization.sorting import sort_rows_inplace, sort_rows_paired_inplace
 from lrp_gym.tracking.fingerprint import Fingerprint
 
 
@@ -19,6 +19,27 @@ def _grid(n=40):
 def test_sorting_network_matches_np_sort(m):
     v = np.random.default_rng(m).random((m, 1000))
     np.testing.assert_array_equal(sort_rows_inplace(v.copy()), np.sort(v, axis=0))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+@pytest.mark.parametrize("m", [2, 3, 4])
+def test_compiled_sorting_network_equals_the_numpy_network_bit_for_bit(m, dtype):
+    """Ties and NaNs included: the same sorted values, and the companions permuted alike."""
+    rng = np.random.default_rng(10 + m)
+    v = rng.random((m, 777)).astype(dtype)
+    v[:, ::5] = v[0, ::5]  # ties
+    v[rng.random(v.shape) < 0.02] = np.nan
+    c = rng.normal(size=v.shape).astype(dtype)
+    for use_numba in (True, False):
+        got = sort_rows_inplace(v.copy(), use_numba=use_numba)
+        np.testing.assert_array_equal(
+            got.view(np.uint8), sort_rows_inplace(v.copy(), False).view(np.uint8)
+        )
+    a, ca, b, cb = v.copy(), c.copy(), v.copy(), c.copy()
+    sort_rows_paired_inplace(a, ca, use_numba=True)
+    sort_rows_paired_inplace(b, cb, use_numba=False)
+    np.testing.assert_array_equal(a.view(np.uint8), b.view(np.uint8))
+    np.testing.assert_array_equal(ca.view(np.uint8), cb.view(np.uint8))
 
 
 def test_invariant_to_order_of_measured_distances(loc_world):
