@@ -174,20 +174,15 @@ def cell_statistics(
     kidnapped = len(recov)
     within = sum(r is not None and r <= RECOVERY_BUDGET_FRAMES for r in recov)
     done = [r for r in recov if r is not None]
-    # Per episode: the frames until first localised (never: the episode's length, as in
-    # trust_metrics) and the errors of its converged steps (for the confidently wrong share).
+    # Per episode: frames to first localised (never: its length) and its converged errors.
     first = [frames_to_localised(e) for e in errs]
     to_loc = [len(e) if f is None else f for f, e in zip(first, errs)]
     wrong = [r.loc_error_m[r.converged] > CONFIDENTLY_WRONG_M for r in results]
-    n_stuck = sum(
-        metrics.longest_wrong_stretch(r.loc_error_m, r.converged) >= metrics.STUCK_WRONG_FRAMES
-        for r in results
-    )
     n_succ = sum(bool(r.success) for r in results)
     n_coll = sum(bool(r.collision) for r in results)
     suspects, suspects_ci = _suspect_statistics(results)
 
-    def boot(items, stat):
+    def boot(items, stat):  # over whole episodes: the steps of one are correlated
         return bootstrap_interval(items, stat, rng)
 
     ci = {
@@ -197,7 +192,7 @@ def cell_statistics(
         "p95_loc_error_m": boot(errs, pooled_percentile(95)),
         "time_localised": boot([e < LOCALISED_M for e in errs], pooled_share),
         "confidently_wrong_rate": boot(wrong, pooled_share),
-        "stuck_wrong_rate": wilson_interval(n_stuck, n),
+        "stuck_wrong_rate": wilson_interval(round(s["stuck_wrong_rate"] * n), n),
         "median_frames_to_localised": boot(to_loc, median_of),
         "recovery_frames": boot(list(recov), median_of),
         "recovered_within_budget": wilson_interval(within, kidnapped) if kidnapped else None,
@@ -213,7 +208,7 @@ def cell_statistics(
         "p95_loc_error_m": s["p95_loc_error_m"],
         "time_localised": s["time_localised"],
         "confidently_wrong_rate": s["confidently_wrong_rate"],
-        "stuck_wrong_rate": n_stuck / n,
+        "stuck_wrong_rate": s["stuck_wrong_rate"],
         "median_frames_to_localised": s["median_frames_to_localised"],
         "kidnapped_episodes": kidnapped,
         "recovery_frames": float(np.median(done)) if done else None,

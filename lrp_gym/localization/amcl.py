@@ -40,7 +40,7 @@ from lrp_gym.localization.particle_statistics import (
     cluster_labels,
 )
 from lrp_gym.localization.pose_estimate import PoseEstimate, cloud_estimate
-from lrp_gym.localization.proposal import LostTest, MeasurementGrid
+from lrp_gym.localization.proposal import LostTest, MeasurementGrid, lost_test_model
 from lrp_gym.localization.resampling import (
     effective_sample_size,
     mode_preserving_resample,
@@ -78,7 +78,7 @@ class Amcl:
         self.world = world
         self.cfg = cfg
         self.model = FingerprintModel.for_world(world, cfg)
-        self.lost_model = self.model.with_clutter_probability(cfg.lost_test_clutter_probability)
+        self.lost_model = lost_test_model(self.model, cfg.lost_test_clutter_probability)
         self.motion_noise = odometry_noise(cfg)
         self.slip = slip_monitor(self.motion_noise, cfg)
         self.clearance_m = float(world.robot.radius_m)

@@ -43,7 +43,6 @@ Invariant to the order of the distances; the array code is in
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -182,15 +181,6 @@ class FingerprintModel:
             detection_probability=cfg.detection_probability,
             ghost_probability=cfg.ghost_probability,
         )
-
-    def with_clutter_probability(self, clutter_probability: float | None) -> FingerprintModel:
-        """This model with another clutter probability (itself for None or the same value);
-        the map, layout and caches are shared."""
-        if clutter_probability is None or clutter_probability == self.clutter_probability:
-            return self
-        other = copy.copy(self)
-        other.clutter_probability = float(clutter_probability)
-        return other
 
     @property
     def clean_probability(self) -> float:

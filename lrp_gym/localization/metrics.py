@@ -35,6 +35,12 @@ def frames_to_localised(errors_m: np.ndarray, localised_m: float = LOCALISED_M) 
     return int(hit[0]) if len(hit) else None
 
 
+def stuck_episodes(episodes: Sequence[tuple[np.ndarray, np.ndarray]]) -> int:
+    """How many of the ``(errors_m, converged)`` episodes have :data:`STUCK_WRONG_FRAMES` or
+    more converged, wrong frames in a row (:func:`longest_wrong_stretch`)."""
+    return sum(longest_wrong_stretch(e, c) >= STUCK_WRONG_FRAMES for e, c in episodes)
+
+
 def reliability(
     confidence: np.ndarray, errors_m: np.ndarray, bins: int = 5, localised_m: float = LOCALISED_M
 ) -> list[dict[str, float | int | None]]:
@@ -103,14 +109,7 @@ def trust_metrics(
             float(np.mean(err[conv] > CONFIDENTLY_WRONG_M)) if conv.any() else None
         ),
         "stuck_wrong_rate": (
-            float(
-                np.mean(
-                    [
-                        longest_wrong_stretch(e, c) >= STUCK_WRONG_FRAMES
-                        for e, c in zip(errors_m, converged, strict=True)
-                    ]
-                )
-            )
+            stuck_episodes(list(zip(errors_m, converged, strict=True))) / len(errors_m)
             if errors_m
             else None
         ),

@@ -20,6 +20,7 @@ that grid twice:
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -203,3 +204,15 @@ class LostTest:
     def p_lost(self) -> float:
         """Probability that the cloud has lost the robot, from the statistic (logistic)."""
         return float(1.0 / (1.0 + np.exp(self.threshold_nats - self.statistic_nats)))
+
+
+def lost_test_model(model: FingerprintModel, clutter_probability: float | None) -> FingerprintModel:
+    """The model the lost test weighs with: ``model`` with its own clutter probability
+    (``model`` itself for None or the same value; map, layout and caches shared). The test's
+    drift is calibrated for an outlier class of 0.2; a heavier one lets a lost cloud explain
+    most returns as clutter almost as cheaply as a right one, and a kidnap goes unnoticed."""
+    if clutter_probability is None or clutter_probability == model.clutter_probability:
+        return model
+    other = copy.copy(model)
+    other.clutter_probability = float(clutter_probability)
+    return other
