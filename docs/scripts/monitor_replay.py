@@ -49,21 +49,27 @@ def record(scenario: str, perturbation: str, severity: float, episodes: int) -> 
             policy.reset()
             obs, _ = env.reset(seed=seed)
             frames.clear()
+            poses = []
             for _ in range(base.cfg.task.max_episode_steps):
                 obs, _, terminated, truncated, _ = env.step(policy.act(obs))
+                poses.append(base.pose.copy())
                 if terminated or truncated:
                     break
             moved = base.perturbations.get("displaced_reflector") if base.perturbations else None
             out.append(
                 {
                     "frames": list(frames),
+                    "true_poses": poses,
                     "moved": set() if moved is None else set(moved.moved.tolist()),
+                    "offsets_m": None if moved is None else moved.offsets_m.copy(),
                 }
             )
     finally:
         rm.ReflectorMonitor.update = update
     monitor = base.stack.monitor
-    return [dict(e, world=base.world, cfg=monitor.cfg, max_range_m=monitor.max_range_m) for e in out]
+    return [
+        dict(e, world=base.world, cfg=monitor.cfg, max_range_m=monitor.max_range_m) for e in out
+    ]
 
 
 def replay(episode: dict, changes: dict) -> dict[int, int]:
