@@ -21,8 +21,17 @@ GRID = {"localization": {"grid_cell_m": 0.1, "grid_cell_deg": 10.0}, "radar": {"
 
 def main(seeds: list[int]) -> None:
     def show(r) -> None:
-        print(json.dumps({"seed": r.seed, "kinds": r.kinds, "amcl_radar_m": r.amcl_radar_m,
-                          "grid_radar_m": r.grid_radar_m}), flush=True)
+        print(
+            json.dumps(
+                {
+                    "seed": r.seed,
+                    "kinds": r.kinds,
+                    "amcl_radar_m": r.amcl_radar_m,
+                    "grid_radar_m": r.grid_radar_m,
+                }
+            ),
+            flush=True,
+        )
 
     results = sweep(seeds, overrides=GRID, localizer="grid", progress=show)
     data = summary(results)
