@@ -11,13 +11,11 @@ One :meth:`Amcl.update` per radar frame:
 4. *resample* when the effective sample size falls below ``resample_ess_ratio * N``:
    low-variance resampling to a KLD-sampling particle count, with a share of uniformly drawn
    particles given by the ``alpha_slow`` / ``alpha_fast`` averages of the measurement
-   likelihood (Augmented MCL, Thrun et al., ch. 8.3.5).
+   likelihood (Augmented MCL, Thrun et al., ch. 8.3.5); the KLD count is computed vectorised
+   rather than incrementally (:mod:`~lrp_gym.localization.kld`).
 
-The KLD count is computed vectorised rather than incrementally (:mod:`~lrp_gym.localization.kld`).
-
-If every particle ends with weight zero (all left the free space, or the likelihood
-underflowed with ``clutter_probability = 0``), the filter re-initialises uniformly: a global
-relocalisation rather than a crash.
+If every particle ends with weight zero (all left the free space, or the likelihood underflowed
+with ``clutter_probability = 0``), the filter re-initialises uniformly, rather than crash.
 """
 
 from __future__ import annotations
@@ -36,9 +34,7 @@ from lrp_gym.localization.particle_motion import (
     sample_motion,
     uniform_free_particles,
 )
-from lrp_gym.localization.particle_statistics import (
-    cluster_labels,
-)
+from lrp_gym.localization.particle_statistics import cluster_labels
 from lrp_gym.localization.pose_estimate import PoseEstimate, cloud_estimate
 from lrp_gym.localization.proposal import LostTest, MeasurementGrid, lost_test_model
 from lrp_gym.localization.resampling import (
@@ -77,8 +73,7 @@ class Amcl:
     def __init__(self, world: World, cfg: LocalizationConfig) -> None:
         self.world = world
         self.cfg = cfg
-        self.model = FingerprintModel.for_world(world, cfg)
-        self.lost_model = lost_test_model(self.model, cfg.lost_test_clutter_probability)
+        self.model = FingerprintModel.for_world(world, cfg)  # the stack may swap it (suspects)
         self.motion_noise = odometry_noise(cfg)
         self.slip = slip_monitor(self.motion_noise, cfg)
         self.clearance_m = float(world.robot.radius_m)
@@ -117,6 +112,11 @@ class Amcl:
         new.particles, new.weights = np.zeros((0, 3)), np.zeros(0)
         new._predicted = new._grid_loglik = new._grid_frame = None
         return new
+
+    @property
+    def lost_model(self) -> FingerprintModel:
+        """The model the lost test weighs with: the current one at its own outlier class."""
+        return lost_test_model(self.model, self.cfg.lost_test_clutter_probability)
 
     def _new_lost_test(self) -> LostTest:
         c = self.cfg

@@ -101,10 +101,10 @@ class DisplacementTest:
         a = self.normal_m2 + _RIDGE * np.eye(2)
         return np.linalg.solve(a, self.moment[..., None])[..., 0]
 
-    def leader(self, chi2: float, lead: float) -> int | None:
+    def leader(self, chi2: float, lead: float, statistic: np.ndarray | None = None) -> int | None:
         """The reflector whose statistic is at least ``chi2`` and ahead of every other one's
-        by ``lead`` (None if there is none)."""
-        t = self.statistic
+        by ``lead`` (None if there is none; ``statistic``: :attr:`statistic` if computed)."""
+        t = self.statistic if statistic is None else statistic
         if len(t) < 2:
             return None
         order = np.argsort(t)

@@ -21,6 +21,7 @@ that grid twice:
 from __future__ import annotations
 
 import copy
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -206,13 +207,21 @@ class LostTest:
         return float(1.0 / (1.0 + np.exp(self.threshold_nats - self.statistic_nats)))
 
 
+# One copy per model and clutter probability: the grids cache their work per model object.
+_LOST_COPIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def lost_test_model(model: FingerprintModel, clutter_probability: float | None) -> FingerprintModel:
     """The model the lost test weighs with: ``model`` with its own clutter probability
-    (``model`` itself for None or the same value; map, layout and caches shared). The test's
-    drift is calibrated for an outlier class of 0.2; a heavier one lets a lost cloud explain
-    most returns as clutter almost as cheaply as a right one, and a kidnap goes unnoticed."""
+    (``model`` itself for None or the same value; map, layout and caches shared; the same
+    copy on every call). The test's drift is calibrated for an outlier class of 0.2; a
+    heavier one lets a lost cloud explain most returns as clutter almost as cheaply as a
+    right one, and a kidnap goes unnoticed."""
     if clutter_probability is None or clutter_probability == model.clutter_probability:
         return model
-    other = copy.copy(model)
-    other.clutter_probability = float(clutter_probability)
-    return other
+    copies = _LOST_COPIES.setdefault(model, {})
+    if clutter_probability not in copies:
+        other = copy.copy(model)
+        other.clutter_probability = float(clutter_probability)
+        copies[clutter_probability] = other
+    return copies[clutter_probability]

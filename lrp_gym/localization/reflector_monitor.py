@@ -230,9 +230,9 @@ class ReflectorMonitor:
         if cfg.bias_m is not None:
             out |= np.abs(self.mean_residual_m) >= cfg.bias_m
         if cfg.displacement_chi2 is not None:
-            test = self.displacement
-            out |= self.suspect & (test.statistic >= 0.5 * cfg.displacement_chi2)
-            j = test.leader(cfg.displacement_chi2, cfg.displacement_lead)
+            t = self.displacement.statistic
+            out |= self.suspect & (t >= 0.5 * cfg.displacement_chi2)
+            j = self.displacement.leader(cfg.displacement_chi2, cfg.displacement_lead, t)
             if j is not None:
                 out[j] = True
         return out

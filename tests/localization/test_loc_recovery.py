@@ -318,3 +318,18 @@ def test_a_kidnap_is_noticed_within_two_frames_under_the_heavy_outlier_class():
     assert max(wrong) <= 2
     heavy = {"localization": {"lost_test_clutter_probability": None}}
     assert _wrong_frames_after_kidnap(27, heavy) > 2
+
+
+def test_the_lost_test_follows_the_map_without_suspects(room):
+    # The stack swaps in a map without the suspected reflectors; the lost test must weigh
+    # with that map too, at its own outlier class, and keep one copy (the grids cache per model).
+    from lrp_gym.localization.reflector_monitor import model_without
+
+    world, cfg = room
+    amcl = Amcl(world, cfg)
+    assert amcl.lost_model.clutter_probability == cfg.lost_test_clutter_probability
+    assert amcl.lost_model is amcl.lost_model
+    amcl.model = model_without(world, cfg, (1,))
+    assert amcl.lost_model.counts == amcl.model.counts != (len(world.layout),)
+    assert amcl.lost_model.clutter_probability == cfg.lost_test_clutter_probability
+    assert amcl.model.clutter_probability == cfg.clutter_probability
