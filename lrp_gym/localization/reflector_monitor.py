@@ -75,7 +75,8 @@ class ReflectorMonitor:
         The running mean's squared weights times each frame's ``1 + 1/k`` (k peers): the
         excess's variance over ``p (1 - p)`` if every reflector missed at one rate p.
     mean_residual_m : ndarray (M,)
-        Running mean of the nearest return minus the prediction (within twice the gate).
+        Running mean of the nearest return minus the prediction (within twice the gate; kept
+        only with the bias test, ``bias_m``).
     """
 
     world: World
@@ -185,10 +186,6 @@ class ReflectorMonitor:
         # reflector's distance find a stray return in most frames.
         gate_m = cfg.gate_sigmas * cfg.range_std_m
         missed = (seen & (np.abs(residual) > gate_m)).astype(float)
-        # The residual's average over the frames it is within twice the gate: a reflector
-        # moved by a few gate widths still answers near its predicted distance in many frames,
-        # but always on the same side.
-        near = seen & (np.abs(residual) <= 2.0 * gate_m)
         # The frame's common miss rate as each reflector sees it: the mean miss of the other
         # judged reflectors not under suspicion (a suspect's misses are its own). Without any,
         # the reflector's own miss stands in: the frame then says nothing for or against it.
@@ -208,7 +205,13 @@ class ReflectorMonitor:
         self.miss_share[seen] += a * (missed[seen] - self.miss_share[seen])
         self.common_share[seen] += a * (others[seen] - self.common_share[seen])
         self.null_var[seen] = (1.0 - a) ** 2 * self.null_var[seen] + a**2 * var_unit[seen]
-        self.mean_residual_m[near] += alpha[near] * (residual[near] - self.mean_residual_m[near])
+        if cfg.bias_m is not None:
+            # The bias test's residual mean, over the frames within twice the gate: a reflector
+            # moved by a few gate widths answers near its prediction, always on one side.
+            near = seen & (np.abs(residual) <= 2.0 * gate_m)
+            self.mean_residual_m[near] += alpha[near] * (
+                residual[near] - self.mean_residual_m[near]
+            )
         before = self.suspect.copy()
         ready = self.visible_frames >= cfg.min_visible_frames
         biased = self._biased()
