@@ -55,29 +55,52 @@ class ReflectorMonitorConfig(Strict):
         "predicted distance (same side) is a suspect too; None (default): off, the "
         "displacement test does this with the pose error removed",
     )
+    displacement_test: Literal["likelihood", "parity"] = Field(
+        default="likelihood",
+        description="how a small move is found: 'likelihood', a likelihood-ratio test over a "
+        "grid of displacements with every nearby return a candidate "
+        "(lrp_gym.localization.displacement_glrt); 'parity', the parity-space test on the "
+        "nearest returns, pose error removed (lrp_gym.localization.displacement_test; its "
+        "settings were chi2 20, lead 10, window 50 frames)",
+    )
     displacement_chi2: PositiveFloat | None = Field(
-        default=20.0,
-        description="a reflector whose fitted displacement (parity-space test on the range "
-        "residuals, pose error removed; lrp_gym.localization.displacement_test) reaches this "
-        "chi-square (2 dof) is a suspect; None: off",
+        default=25.0,
+        description="a reflector whose displacement statistic (twice the log-likelihood "
+        "ratio of its best-fitting move against none; chi-square with 2 dof for the parity "
+        "test) reaches this is a suspect; None: off",
     )
     displacement_lead: NonNegFloat = Field(
-        default=10.0,
+        default=20.0,
         description="... and exceeds every other reflector's statistic by this (one moved "
         "reflector spreads into the others' statistics)",
     )
+    displacement_max_m: PositiveFloat = Field(
+        default=0.35,
+        description="likelihood test: the largest move it fits (farther moves take the "
+        "reflector's returns out of the miss gate, and the miss count names them)",
+    )
+    displacement_detection_probability: Probability = Field(
+        default=0.9,
+        description="likelihood test: probability that a reflector's own return is among a "
+        "frame's distances",
+    )
+    displacement_clutter_per_m: PositiveFloat = Field(
+        default=3.0,
+        description="likelihood test: density of the other reflector-like distances around a "
+        "reflector's, per metre (about 3 on the patrol: structure, ghosts, other reflectors)",
+    )
     displacement_gate_m: PositiveFloat = Field(
         default=0.15,
-        description="residuals within this enter the displacement test (farther ones are "
+        description="parity test: residuals within this enter it (farther ones are "
         "another return's; the miss count covers reflectors moved farther)",
     )
     displacement_std_m: PositiveFloat = Field(
         default=0.03,
-        description="std of a measured distance in the displacement test (radar range noise; "
-        "the pose error is projected out)",
+        description="std of a reflector's measured distance about the one a displacement "
+        "predicts (radar range noise; the parity test projects the pose error out)",
     )
     displacement_window_frames: Annotated[int, Field(ge=2, le=100_000)] = Field(
-        default=50,
+        default=30,
         description="the displacement test forgets over about this many frames: about the "
         "naming budget, and a longer window adds up slow, correlated noise (clutter) too",
     )

@@ -104,9 +104,14 @@ class DisplacementTest:
     def leader(self, chi2: float, lead: float, statistic: np.ndarray | None = None) -> int | None:
         """The reflector whose statistic is at least ``chi2`` and ahead of every other one's
         by ``lead`` (None if there is none; ``statistic``: :attr:`statistic` if computed)."""
-        t = self.statistic if statistic is None else statistic
-        if len(t) < 2:
-            return None
-        order = np.argsort(t)
-        j, second = int(order[-1]), float(t[order[-2]])
-        return j if t[j] >= chi2 and t[j] - second >= lead else None
+        return leading_reflector(self.statistic if statistic is None else statistic, chi2, lead)
+
+
+def leading_reflector(statistic: np.ndarray, chi2: float, lead: float) -> int | None:
+    """Index of the largest ``statistic`` if it is at least ``chi2`` and exceeds every other
+    one by ``lead``; else None (also with fewer than two reflectors)."""
+    if len(statistic) < 2:
+        return None
+    order = np.argsort(statistic)
+    j, second = int(order[-1]), float(statistic[order[-2]])
+    return j if statistic[j] >= chi2 and statistic[j] - second >= lead else None

@@ -42,16 +42,43 @@ surveying the room learns which reflector to check (``info["suspect_reflectors"]
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from lrp_gym.config.localization import LocalizationConfig, ReflectorMonitorConfig
+from lrp_gym.localization.displacement_glrt import DisplacementGlrt
 from lrp_gym.localization.displacement_test import DisplacementTest
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
+
+
+@dataclass(frozen=True)
+class MonitorFrame:
+    """What one converged frame shows the monitor (:meth:`ReflectorMonitor.observe`).
+
+    Attributes
+    ----------
+    judged : ndarray (M,) of bool
+        The reflectors this frame judges (visible and resolvable).
+    residual_m : ndarray (M,)
+        Nearest reflector-like distance minus each one's predicted distance (inf without any).
+    bearing : ndarray (M, 2), optional
+        Horizontal unit vectors from the estimated radar position to the reflectors; without
+        them the displacement test does not see the frame.
+    predicted_m : ndarray (M,), optional
+        The reflectors' predicted distances.
+    distances_m : ndarray (Z,)
+        Every reflector-like distance of the frame, all types.
+    """
+
+    judged: np.ndarray
+    residual_m: np.ndarray
+    bearing: np.ndarray | None = None
+    predicted_m: np.ndarray | None = None
+    distances_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 @dataclass
@@ -92,9 +119,19 @@ class ReflectorMonitor:
         self.visible_frames = np.zeros(m, dtype=np.int64)
         self.suspect = np.zeros(m, dtype=bool)
         cfg = self.cfg
-        self.displacement = DisplacementTest(
-            m, cfg.displacement_std_m, cfg.displacement_gate_m, cfg.displacement_window_frames
-        )
+        if cfg.displacement_test == "parity":
+            self.displacement = DisplacementTest(
+                m, cfg.displacement_std_m, cfg.displacement_gate_m, cfg.displacement_window_frames
+            )
+        else:
+            self.displacement = DisplacementGlrt(
+                m,
+                cfg.displacement_std_m,
+                cfg.displacement_max_m,
+                cfg.displacement_detection_probability,
+                cfg.displacement_clutter_per_m,
+                cfg.displacement_window_frames,
+            )
 
     def reset(self) -> None:
         self.miss_share[:] = 0.0
@@ -141,21 +178,13 @@ class ReflectorMonitor:
         ``others_m``: predicted distances of other known static returns (the clutter map's
         points), which a reflector's return merges with just as with another reflector's."""
         frame = self.observe(estimate, gated, others_m)
-        return False if frame is None else self.accumulate(*frame)
+        return False if frame is None else self.accumulate(frame)
 
     def observe(
         self, estimate: PoseEstimate, gated: Fingerprint, others_m: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-        """One frame's evidence, without adding it (see :meth:`update`).
-
-        Returns
-        -------
-        (counted, residual_m, bearing) or None
-            Boolean (M,): the reflectors this frame judges (visible and resolvable); (M,) the
-            nearest reflector-like distance minus each one's predicted distance (inf without
-            any); (M, 2) the horizontal unit bearings from the estimated radar position to the
-            reflectors. None when the frame judges none (or is not converged).
-        """
+    ) -> MonitorFrame | None:
+        """One frame's evidence, without adding it (see :meth:`update`); None when the
+        frame judges no reflector (or is not converged)."""
         if not estimate.converged:
             return None
         predicted, seen, bearing = self._geometry(estimate.pose[:2])
@@ -170,17 +199,16 @@ class ReflectorMonitor:
         seen &= gap.min(axis=1) >= 2.0 * self.world.fmcw.range_resolution_m
         if not seen.any():
             return None
-        return seen, self._nearest_residuals(predicted, gated), bearing
+        z = np.concatenate([np.zeros(0), *gated.distances_m])
+        return MonitorFrame(seen, self._nearest_residuals(predicted, z), bearing, predicted, z)
 
-    def accumulate(
-        self, seen: np.ndarray, residual: np.ndarray, bearing: np.ndarray | None = None
-    ) -> bool:
-        """Add one frame's evidence (what :meth:`observe` returns; without ``bearing`` the
-        displacement test does not see the frame); returns whether the suspect set changed."""
+    def accumulate(self, frame: MonitorFrame) -> bool:
+        """Add one frame's evidence (what :meth:`observe` returns); returns whether the
+        suspect set changed."""
         cfg = self.cfg
-        if bearing is not None and cfg.displacement_chi2 is not None:
-            # Fault exclusion: a suspect's residuals would spread into its peers' parity.
-            self.displacement.add(seen & ~self.suspect, residual, bearing)
+        seen, residual = frame.judged, frame.residual_m
+        if frame.bearing is not None and cfg.displacement_chi2 is not None:
+            self._add_displacement(frame)
         # Not widened by the estimate's covariance: that counts the particle set's tails
         # (about 6 cm when converged, while the error is 1-2 cm) and would let a moved
         # reflector's distance find a stray return in most frames.
@@ -223,6 +251,16 @@ class ReflectorMonitor:
         self.suspect &= ((self.miss_share > cfg.clear_share) & (excess > 0.0)) | biased
         return bool(np.any(before != self.suspect))
 
+    def _add_displacement(self, frame: MonitorFrame) -> None:
+        test = self.displacement
+        if isinstance(test, DisplacementTest):
+            # Fault exclusion: a suspect's residuals would spread into its peers' parity.
+            test.add(frame.judged & ~self.suspect, frame.residual_m, frame.bearing)
+        elif frame.predicted_m is not None:
+            # A suspect keeps being judged (its statistic holds it, with hysteresis): without
+            # a projection, its residuals do not spread into its peers'.
+            test.add(frame.judged, frame.predicted_m, frame.distances_m, frame.bearing)
+
     def _biased(self) -> np.ndarray:
         """Boolean (M,): suspects on their residuals, not their misses. The displacement test
         names the reflector whose fitted move is significant and ahead of the others', and
@@ -255,11 +293,12 @@ class ReflectorMonitor:
         p = self.common_share
         return excess >= self.cfg.excess_z * np.sqrt(p * (1.0 - p) * self.null_var)
 
-    def _nearest_residuals(self, predicted: np.ndarray, gated: Fingerprint) -> np.ndarray:
-        """Per reflector, the nearest reflector-like measured distance minus the predicted
-        one (inf without any). Distances of every type count: a weak return's RCS estimate
-        scatters, and the tracker may give a small reflector's return to another type."""
-        z = np.concatenate([np.zeros(0), *gated.distances_m])
+    @staticmethod
+    def _nearest_residuals(predicted: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """Per reflector, the nearest of the reflector-like measured distances ``z`` minus
+        the predicted one (inf without any). Distances of every type count: a weak return's
+        RCS estimate scatters, and the tracker may give a small reflector's return to another
+        type."""
         if len(z) == 0:
             return np.full(len(predicted), np.inf)
         diff = z[None, :] - predicted[:, None]

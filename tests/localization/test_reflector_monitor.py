@@ -10,7 +10,7 @@ import lrp_gym  # noqa: F401  (registers the envs)
 from agents.pure_pursuit import PurePursuitPolicy
 from lrp_gym.config import ReflectorMonitorConfig, load_scenario
 from lrp_gym.localization.pose_estimate import PoseEstimate
-from lrp_gym.localization.reflector_monitor import ReflectorMonitor
+from lrp_gym.localization.reflector_monitor import MonitorFrame, ReflectorMonitor
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world import World
 
@@ -147,7 +147,7 @@ def test_the_common_share_leaves_out_suspects_and_frames_without_peers(world):
     mon.suspect[3] = True
     seen = np.ones(n, dtype=bool)
     residual = np.array([0.0, np.inf, 0.0, np.inf])  # 1 and the suspect 3 miss
-    mon.accumulate(seen, residual)
+    mon.accumulate(MonitorFrame(seen, residual))
     # 0's peers are 1 and 2 (not the suspect 3): one of two missed; 1's peers 0 and 2: none.
     np.testing.assert_allclose(mon.common_share, [0.5, 0.0, 0.5, 1 / 3])
     # Alone in its frames, a reflector's own miss stands in for the common one: no evidence
@@ -155,7 +155,7 @@ def test_the_common_share_leaves_out_suspects_and_frames_without_peers(world):
     mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
     alone = np.array([True, False, False, False])
     for _ in range(3 * CFG.min_visible_frames):
-        mon.accumulate(alone, np.full(n, np.inf))
+        mon.accumulate(MonitorFrame(alone, np.full(n, np.inf)))
     assert mon.miss_share[0] == mon.common_share[0] == 1.0
     assert mon.null_var[0] == 0.0 and mon.suspects == ()
 
