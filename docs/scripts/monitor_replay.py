@@ -24,8 +24,13 @@ from lrp_gym.localization import reflector_monitor as rm
 VARIANTS = {
     "session 8 (misses + bias test)": {"bias_m": 0.04, "displacement_chi2": None},
     "misses only": {"displacement_chi2": None},
-    "misses + displacement test (default)": {},
-    "misses + both": {"bias_m": 0.04},
+    "misses + parity test (session 9)": {
+        "displacement_test": "parity",
+        "displacement_chi2": 20.0,
+        "displacement_lead": 10.0,
+        "displacement_window_frames": 50,
+    },
+    "misses + likelihood test (default)": {},
 }
 
 

@@ -3,10 +3,10 @@
 Records EPISODES patrol episodes with one reflector moved by SHIFT metres (as
 ``monitor_replay.py`` does; seeds 0..EPISODES-1, drop_suspects off) and compares, per episode,
 whether the moved reflector is named within 40 frames
-- by the monitor on the recorded frames (estimated pose, the detections' nearest return);
+- by the monitor on the recorded frames (estimated pose, the detections);
 - by an ideal detector: the true pose, every visible reflector's true distance with the
-  radar's 2.6 cm range noise and no other return, the monitor's miss test (share >= 0.25 of
-  >= 12 visible frames outside the 0.105 m gate) and its displacement test.
+  radar's 2.6 cm range noise and no other return, fed to the same monitor (its miss test and
+  its displacement test).
 
     python docs/scripts/naming_yardstick.py ipin2023-patrol 0.25 50
 """
@@ -22,37 +22,33 @@ sys.path.insert(0, str(Path(__file__).parent))
 from monitor_replay import record, replay  # noqa: E402
 
 from lrp_gym.experiments.robustness import SUSPECT_BUDGET_FRAMES  # noqa: E402
-from lrp_gym.localization.displacement_test import DisplacementTest  # noqa: E402
-from lrp_gym.localization.reflector_monitor import ReflectorMonitor  # noqa: E402
+from lrp_gym.localization.reflector_monitor import MonitorFrame, ReflectorMonitor  # noqa: E402
 
 
 def ideal_named(ep: dict, rng: np.random.Generator) -> tuple[bool, bool]:
-    """(named by either test, named by misses alone) within the naming budget."""
+    """(named by the monitor, named by its misses alone) within the naming budget, on the
+    ideal detector's frames."""
     world, cfg = ep["world"], ep["cfg"]
-    mon = ReflectorMonitor(world, cfg, ep["max_range_m"])
-    layout = world.layout.positions_m
-    true_pos = layout.copy()
+    true_pos = world.layout.positions_m.copy()
     moved = sorted(ep["moved"])
     true_pos[moved] += ep["offsets_m"]
-    test = DisplacementTest(
-        len(layout), cfg.displacement_std_m, cfg.displacement_gate_m, cfg.displacement_window_frames
-    )
-    seen_n, misses = np.zeros(len(layout)), np.zeros(len(layout))
-    gate_m = cfg.gate_sigmas * cfg.range_std_m
-    by_test = by_misses = False
+    monitors = [
+        ReflectorMonitor(world, c, ep["max_range_m"])
+        for c in (cfg, cfg.model_copy(update={"displacement_chi2": None}))
+    ]
+    named = [False, False]
     for pose in ep["true_poses"][:SUSPECT_BUDGET_FRAMES]:
-        pred, seen, bearing = mon._geometry(pose[:2])
+        predicted, seen, bearing = monitors[0]._geometry(pose[:2])
         radar = world.radar_position(np.asarray(pose[:2], float))
-        residual = np.linalg.norm(true_pos - radar, axis=1) + rng.normal(0, 0.026, len(pred)) - pred
-        test.add(seen, residual, bearing)
-        seen_n += seen
-        misses += seen & (np.abs(residual) > gate_m)
-        by_test |= test.leader(cfg.displacement_chi2, cfg.displacement_lead) in moved
-        share = np.divide(misses, seen_n, out=np.zeros_like(misses), where=seen_n > 0)
-        by_misses |= bool(
-            np.any(((seen_n >= cfg.min_visible_frames) & (share >= cfg.suspect_share))[moved])
+        measured = np.linalg.norm(true_pos - radar, axis=1) + rng.normal(0, 0.026, len(seen))
+        z = np.sort(measured[seen])  # only the reflectors in view answer
+        frame = MonitorFrame(
+            seen, ReflectorMonitor._nearest_residuals(predicted, z), bearing, predicted, z
         )
-    return by_test or by_misses, by_misses
+        for k, mon in enumerate(monitors):
+            mon.accumulate(frame)
+            named[k] |= bool(set(mon.suspects) & ep["moved"])
+    return named[0], named[1]
 
 
 def main(scenario: str, shift_m: float, episodes: int) -> None:

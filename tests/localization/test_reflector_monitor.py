@@ -182,8 +182,8 @@ def test_hysteresis_is_validated():
         ReflectorMonitorConfig(suspect_share=0.2, clear_share=0.3)
 
 
-def _patrol(overrides, seed, frames=40):
-    env = gym.make("LRPRadarNavFast-v0", scenario="ipin2023-patrol", overrides=overrides)
+def _patrol(overrides, seed, frames=40, scenario="ipin2023-patrol"):
+    env = gym.make("LRPRadarNavFast-v0", scenario=scenario, overrides=overrides)
     policy = PurePursuitPolicy.from_env(env)
     obs, _ = env.reset(seed=seed)
     named = {}
@@ -196,13 +196,15 @@ def _patrol(overrides, seed, frames=40):
     return env.unwrapped, named
 
 
-def _displaced_patrols(shift_m: float, seeds=range(6)) -> tuple[int, int]:
+def _displaced_patrols(
+    shift_m: float, seeds=range(6), scenario="ipin2023-patrol"
+) -> tuple[int, int]:
     """Over patrols with one reflector moved by ``shift_m``: episodes naming it within 40
     frames, and episodes naming another one."""
     over = {"perturbations": {"displaced_reflector": {"severity": shift_m}}}
     hits = others = 0
     for seed in seeds:
-        env, named = _patrol(over, seed)
+        env, named = _patrol(over, seed, scenario=scenario)
         moved = set(env.perturbations["displaced_reflector"].moved.tolist())
         hits += bool(moved & set(named))
         others += bool(set(named) - moved)
@@ -220,11 +222,14 @@ def test_a_moved_reflector_is_named_on_the_patrol_and_left_out_of_the_map():
     assert others <= 1
 
 
-def test_a_quarter_metre_move_is_named_on_the_patrol():
+@pytest.mark.parametrize("scenario", ["ipin2023-patrol", "ipin2023-2types-patrol"])
+def test_a_quarter_metre_move_is_named_on_the_patrol(scenario):
     # A 0.25 m move is often across the lines of sight: it rarely leaves the 0.1 m gate, so
     # the miss count alone names it late or never; the displacement test adds up the frames.
-    hits, others = _displaced_patrols(0.25)
-    assert hits >= 5
+    # Replayed on 30 recorded patrols: named in 29 / 28 (1-type / 2 + 2), by the parity test
+    # on the nearest returns in 26 / 20 (docs/robustness.md).
+    hits, others = _displaced_patrols(0.25, range(10), scenario)
+    assert hits >= 9
     assert others <= 1
 
 
