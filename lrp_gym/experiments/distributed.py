@@ -124,7 +124,7 @@ def episode_to_json(r: EpisodeResult) -> dict[str, Any]:
             v = v.tolist()
         elif f.name == "suspect_first_frame":
             v = [[int(k), int(n)] for k, n in v.items()]
-        elif f.name == "perturbed_reflectors":
+        elif f.name in ("perturbed_reflectors", "perturbed_after_frame"):
             v = [int(j) for j in v]
         out[f.name] = v
     return out
@@ -138,6 +138,7 @@ def episode_from_json(d: dict[str, Any]) -> EpisodeResult:
             kw[name] = np.asarray(kw[name], dtype=dtype)
     kw["suspect_first_frame"] = {int(k): int(n) for k, n in kw["suspect_first_frame"]}
     kw["perturbed_reflectors"] = tuple(kw["perturbed_reflectors"])
+    kw["perturbed_after_frame"] = tuple(kw.get("perturbed_after_frame", ()))
     return EpisodeResult(**kw)
 
 

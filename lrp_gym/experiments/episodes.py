@@ -104,9 +104,11 @@ class EpisodeResult:
     waypoints_m: np.ndarray = field(repr=False)
     confidence: np.ndarray | None = field(default=None, repr=False)
     kidnap_frame: int | None = None  # the frame a kidnapping perturbation moved the robot
-    #: Reflectors a perturbation moved or hid for good, and the first frame each reflector
-    #: was named in ``info["suspect_reflectors"]``.
+    #: Reflectors a perturbation moved or hid, the last frame before each was (0: moved
+    #: before the episode; empty: all 0), and the first frame each reflector was named in
+    #: ``info["suspect_reflectors"]``.
     perturbed_reflectors: tuple[int, ...] = ()
+    perturbed_after_frame: tuple[int, ...] = ()
     suspect_first_frame: dict[int, int] = field(default_factory=dict, repr=False)
 
     def row(self) -> dict[str, Any]:
@@ -185,6 +187,7 @@ class EpisodeRecorder:
             waypoints_m=self.waypoints_m,
             kidnap_frame=kidnap_frame(perturbations),
             perturbed_reflectors=perturbed_reflectors(perturbations),
+            perturbed_after_frame=perturbed_after_frame(perturbations),
             suspect_first_frame=dict(self.suspect_first_frame),
         )
 
@@ -338,6 +341,20 @@ def perturbed_reflectors(perturbations: PerturbationSet | None) -> tuple[int, ..
     if isinstance(hidden, Shadowing):
         out |= {int(j) for j in hidden.targets}
     return tuple(sorted(out))
+
+
+def perturbed_after_frame(perturbations: PerturbationSet | None) -> tuple[int, ...]:
+    """For each of :func:`perturbed_reflectors`, the last frame before the perturbation
+    touched it: 0 for a moved reflector (moved before the episode), the frame before the
+    shadowing began for a hidden one. A reflector both moved and hidden counts from 0."""
+    reflectors = perturbed_reflectors(perturbations)
+    if not reflectors:
+        return ()
+    hidden = perturbations.get("shadowing")
+    moved = perturbations.get("displaced_reflector")
+    moved_set = {int(j) for j in moved.moved} if isinstance(moved, DisplacedReflector) else set()
+    start = hidden.start if isinstance(hidden, Shadowing) else 1
+    return tuple(0 if j in moved_set else max(0, start - 1) for j in reflectors)
 
 
 def write_gif(frames: list[np.ndarray], path: str | Path, fps: float = 4.0) -> Path:

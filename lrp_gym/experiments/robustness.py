@@ -131,15 +131,23 @@ def cell_from_results(
 
 def suspect_counts(results: Sequence[EpisodeResult]) -> tuple[int, int, int]:
     """The reflector monitor's score: (episodes naming a moved or vanished reflector within
-    :data:`SUSPECT_BUDGET_FRAMES`, episodes with such a reflector, episodes naming another)."""
-    budget = SUSPECT_BUDGET_FRAMES
+    :data:`SUSPECT_BUDGET_FRAMES` of the perturbation's start, episodes with such a
+    reflector, episodes naming another)."""
     perturbed = [r for r in results if r.perturbed_reflectors]
-    named = sum(
-        any(r.suspect_first_frame.get(j, budget + 1) <= budget for j in r.perturbed_reflectors)
-        for r in perturbed
-    )
+    named = sum(_named_in_budget(r) for r in perturbed)
     others = sum(bool(set(r.suspect_first_frame) - set(r.perturbed_reflectors)) for r in results)
     return named, len(perturbed), others
+
+
+def _named_in_budget(r: EpisodeResult) -> bool:
+    """Whether a perturbed reflector was named within the budget after it was perturbed (a
+    hidden one counts from the frame it disappeared, not from the episode's start)."""
+    after = r.perturbed_after_frame or (0,) * len(r.perturbed_reflectors)
+    first = r.suspect_first_frame
+    return any(
+        first.get(j, np.inf) - k <= SUSPECT_BUDGET_FRAMES
+        for j, k in zip(r.perturbed_reflectors, after, strict=True)
+    )
 
 
 def _suspect_statistics(results: Sequence[EpisodeResult]) -> tuple[dict, dict]:

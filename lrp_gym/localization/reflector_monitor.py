@@ -12,10 +12,13 @@ windows). The miss share (a running mean over its first ``window_frames``
 visible frames, then exponentially weighted over about that many) above ``suspect_share``,
 after at least ``min_visible_frames`` visible frames, names the reflector a suspect; below
 ``clear_share`` clears it (hysteresis). A reflector moved by less than a few gate widths
-still answers inside or near the gate in many frames: the displacement test
-(:mod:`lrp_gym.localization.displacement_test`) fits its move to the residuals of the frames
-with the estimate's position error projected out, and names it when the fit is significant
-and ahead of every other reflector's. The null case is the radar's own miss rate (about 5 %
+still answers inside or near the gate in many frames: the displacement test names it when
+a fixed move explains its returns over the frames significantly better than none, and better
+than any other reflector's move explains theirs. By default
+(:mod:`lrp_gym.localization.displacement_glrt`) every return near the reflector's distance is
+a candidate for its own, because the nearest one is often the room's; the parity test of
+:mod:`lrp_gym.localization.displacement_test` fits the nearest returns, with the estimate's
+position error projected out. The null case is the radar's own miss rate (about 5 %
 per frame for a visible trihedral in the paper room). The gate must be tight: a frame has about ten
 reflector-like returns (ghosts via walls and ceiling, room corners) between 2 and 6 m, so a
 moved reflector's predicted distance still finds some return within 0.1 m in about half of

@@ -15,6 +15,7 @@ from lrp_gym.experiments.robustness import (
     cell_statistics,
     recovery_frames,
     run_matrix,
+    suspect_counts,
 )
 
 
@@ -43,6 +44,23 @@ def _episode(seed, success, errors, converged=None):
         est_xy=np.zeros((n + 1, 2)),
         waypoints_m=np.zeros((2, 2)),
     )
+
+
+def test_a_hidden_reflector_has_its_naming_budget_from_the_frame_it_disappeared():
+    from dataclasses import replace
+
+    ep = _episode(0, True, [0.05] * 80)
+    # Moved before the episode (after frame 0), named at frame 40: in time; at 41: late.
+    moved = replace(ep, perturbed_reflectors=(2,), perturbed_after_frame=(0,))
+    assert suspect_counts([replace(moved, suspect_first_frame={2: 40})]) == (1, 1, 0)
+    assert suspect_counts([replace(moved, suspect_first_frame={2: 41})]) == (0, 1, 0)
+    # Hidden from frame 20 (after frame 19): named at frame 59 is within 40 frames of it.
+    hidden = replace(ep, perturbed_reflectors=(1,), perturbed_after_frame=(19,))
+    assert suspect_counts([replace(hidden, suspect_first_frame={1: 59})]) == (1, 1, 0)
+    assert suspect_counts([replace(hidden, suspect_first_frame={1: 60, 3: 5})]) == (0, 1, 1)
+    # Old results without the onsets count from the episode's start.
+    legacy = replace(ep, perturbed_reflectors=(1,), suspect_first_frame={1: 41})
+    assert suspect_counts([legacy]) == (0, 1, 0)
 
 
 def test_cell_statistics_intervals_and_trust_metrics():

@@ -10,6 +10,7 @@ import pytest
 
 import lrp_gym  # noqa: F401  (registers the env ids)
 from lrp_gym.config import PerturbationsConfig, ScenarioError
+from lrp_gym.experiments.episodes import perturbed_after_frame, perturbed_reflectors
 from lrp_gym.perturbations import NAMES, FrameContext, PerturbationSet
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world import World
@@ -57,6 +58,8 @@ def test_static_shadowing_hides_that_reflector_for_exactly_n_frames(quiet):
     hidden_frames = [k for k, m in enumerate(masks) if m is not None and m.any()]
     assert hidden_frames == list(range(4, 14))
     assert all(np.flatnonzero(masks[k]).tolist() == [target] for k in hidden_frames)
+    # The monitor's naming budget counts from the frame it disappeared.
+    assert perturbed_reflectors(ps) == (target,) and perturbed_after_frame(ps) == (3,)
     # In the channel: every path of that reflector is gone, the others' stay.
     free = sensor.paths(POSE, np.zeros(2))
     shadowed = sensor.paths(POSE, np.zeros(2), hidden=masks[5])
@@ -133,6 +136,7 @@ def test_displaced_reflector_shifts_the_detected_distance_not_the_map(quiet):
     layout = ps.reset(ctx(world, sensor), rng)
     moved = ps["displaced_reflector"].moved
     assert len(moved) == 1
+    assert perturbed_after_frame(ps) == (0,)  # moved before the episode: budget from frame 0
     shift = layout.positions_m - world.layout.positions_m
     j = int(moved[0])
     assert np.linalg.norm(shift[j, :2]) == pytest.approx(0.5, abs=0.01) or np.any(
