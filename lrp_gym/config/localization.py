@@ -89,6 +89,13 @@ class ReflectorMonitorConfig(Strict):
         description="likelihood test: density of the other reflector-like distances around a "
         "reflector's, per metre (about 3 on the patrol: structure, ghosts, other reflectors)",
     )
+    displacement_confirm_chi2: PositiveFloat | None = Field(
+        default=6.0,
+        description="likelihood test: name a reflector only if the parity test (which "
+        "projects the estimate's position error out) gives it at least this too: with wheel "
+        "slip the estimate lags by 5-10 cm, which the likelihood test alone takes for a "
+        "moved reflector; None: no confirmation",
+    )
     displacement_gate_m: PositiveFloat = Field(
         default=0.15,
         description="parity test: residuals within this enter it (farther ones are "

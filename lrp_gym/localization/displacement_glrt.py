@@ -23,8 +23,10 @@ only if its statistic is high and ahead of every other reflector's (a moved refl
 the estimate, so some of its residual shows at the others).
 
 The residuals are taken from the estimate as it is (no position error removed): correcting
-each frame with the position the other reflectors' nearest returns imply took their wrong
-associations in and named more reflectors that had not moved (docs/robustness.md).
+each frame with the position the other reflectors' returns imply took their wrong
+associations in (docs/robustness.md). So a biased estimate (wheel slip: 5-10 cm behind) looks
+like moved reflectors to this test; the monitor asks the parity test, which projects the
+position error out, to confirm a name (``displacement_confirm_chi2``).
 """
 
 from __future__ import annotations
@@ -120,10 +122,16 @@ class DisplacementGlrt:
         near = np.abs(diff) <= self.reach_m
         diff = np.where(near, diff, np.inf)[:, near.any(axis=0)]  # (J, Z')
         shift = bearing[idx] @ self.offsets_m.T  # (J, G): u . d
+        self.log_lr[idx] += self._terms(diff, shift)
+
+    def _terms(self, diff: np.ndarray, shift: np.ndarray) -> np.ndarray:
+        """One frame's log-likelihood terms (J, G) of the hypotheses, up to a constant per
+        reflector: ``diff`` (J, Z) candidates minus predicted distances, ``shift`` (J, G) the
+        offsets ``u . d`` the hypotheses predict."""
         z = (diff[:, None, :] - shift[:, :, None]) / self.std_m
         density = np.exp(-0.5 * z * z).sum(axis=2) / (_SQRT_2PI * self.std_m)
         p_d = self.detection_probability
-        self.log_lr[idx] += np.log((1.0 - p_d) + p_d * density / self.clutter_per_m)
+        return np.log((1.0 - p_d) + p_d * density / self.clutter_per_m)
 
     @property
     def statistic(self) -> np.ndarray:

@@ -135,6 +135,11 @@ class ReflectorMonitor:
                 cfg.displacement_clutter_per_m,
                 cfg.displacement_window_frames,
             )
+        self.parity = None
+        if cfg.displacement_test == "likelihood" and cfg.displacement_confirm_chi2 is not None:
+            self.parity = DisplacementTest(
+                m, cfg.displacement_std_m, cfg.displacement_gate_m, cfg.displacement_window_frames
+            )
 
     def reset(self) -> None:
         self.miss_share[:] = 0.0
@@ -144,6 +149,8 @@ class ReflectorMonitor:
         self.visible_frames[:] = 0
         self.suspect[:] = False
         self.displacement.reset()
+        if self.parity is not None:
+            self.parity.reset()
 
     @property
     def suspects(self) -> tuple[int, ...]:
@@ -263,6 +270,8 @@ class ReflectorMonitor:
             # A suspect keeps being judged (its statistic holds it, with hysteresis): without
             # a projection, its residuals do not spread into its peers'.
             test.add(frame.judged, frame.predicted_m, frame.distances_m, frame.bearing)
+            if self.parity is not None:
+                self.parity.add(frame.judged & ~self.suspect, frame.residual_m, frame.bearing)
 
     def _biased(self) -> np.ndarray:
         """Boolean (M,): suspects on their residuals, not their misses. The displacement test
@@ -277,6 +286,9 @@ class ReflectorMonitor:
             t = self.displacement.statistic
             out |= self.suspect & (t >= 0.5 * cfg.displacement_chi2)
             j = self.displacement.leader(cfg.displacement_chi2, cfg.displacement_lead, t)
+            if j is not None and self.parity is not None:
+                if self.parity.statistic[j] < cfg.displacement_confirm_chi2:
+                    j = None
             if j is not None:
                 out[j] = True
         return out
