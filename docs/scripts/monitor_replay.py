@@ -30,6 +30,7 @@ VARIANTS = {
         "displacement_lead": 10.0,
         "displacement_window_frames": 50,
     },
+    "misses + likelihood test, unconfirmed": {"displacement_confirm_chi2": None},
     "misses + likelihood test (default)": {},
 }
 
