@@ -17,7 +17,7 @@ from lrp_gym.experiments.robustness import BASELINE, plot_matrix
 from lrp_gym.output import save_figure
 
 HERE = Path(__file__).resolve().parent.parent
-ORDER = ("clutter", "kidnap", "missed", "slip", "displaced")
+ORDER = ("clutter", "kidnap", "missed", "slip", "displaced", "shadowing")
 
 
 def merged(scenario: str) -> dict:
