@@ -275,8 +275,9 @@ class ReflectorMonitor:
 
     def _biased(self) -> np.ndarray:
         """Boolean (M,): suspects on their residuals, not their misses. The displacement test
-        names the reflector whose fitted move is significant and ahead of the others', and
-        keeps it while its statistic stays above half the threshold (hysteresis); the older
+        names the reflector whose fitted move is significant and ahead of the others' (the
+        likelihood test's leader confirmed by the parity test, ``displacement_confirm_chi2``),
+        and keeps it while its statistic stays above half the threshold (hysteresis); the older
         bias test (``bias_m``, off by default) asks for a one-sided mean residual."""
         cfg = self.cfg
         out = np.zeros(len(self.suspect), dtype=bool)
