@@ -9,7 +9,8 @@ PYTHONPATH=$PWD .venv/bin/python docs/scripts/kidnap_replay.py 5,25 1 \
     localization.initial_particles=2000 localization.start_grid_m=0.1
 ```
 
-Arguments: seeds (comma-separated), severity, then ``KEY.PATH=VALUE`` settings.
+Arguments: seeds (comma-separated), severity, then ``KEY.PATH=VALUE`` settings; the
+scenario is ``ipin2023-patrol`` unless ``--scenario NAME`` comes first.
 """
 
 from __future__ import annotations
@@ -25,11 +26,15 @@ from lrp_gym.experiments.robustness import recovery_frames
 def main() -> None:
     from agents import registry
 
-    seeds = [int(s) for s in sys.argv[1].split(",")]
-    severity, sets = sys.argv[2], sys.argv[3:]
+    args = sys.argv[1:]
+    scenario = "ipin2023-patrol"
+    if args[0] == "--scenario":
+        scenario, args = args[1], args[2:]
+    seeds = [int(s) for s in args[0].split(",")]
+    severity, sets = args[1], args[2:]
     kidnap = [f"perturbations.kidnapping.severity={severity}"]
-    over = overrides("ipin2023-patrol", kidnap + sets, "detections")
-    env = ep.make_eval_env("pure-pursuit", None, "ipin2023-patrol", overrides=over)
+    over = overrides(scenario, kidnap + sets, "detections")
+    env = ep.make_eval_env("pure-pursuit", None, scenario, overrides=over)
     policy = registry.make_agent("pure-pursuit", env)
     for seed in seeds:
         r = ep.run_episode(env, policy, seed)
