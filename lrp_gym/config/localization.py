@@ -234,7 +234,15 @@ class LocalizationConfig(Strict):
         description="draw the global start and recovery particles from a map-wide grid of the "
         "frame likelihood, and test whether the cloud has lost the robot",
     )
-    global_grid_m: PositiveFloat = 0.1
+    global_grid_m: PositiveFloat = Field(
+        default=0.1,
+        description="spacing of the lost test's and recovery's map-wide grid (m); the global "
+        "start's grid is twice as fine unless start_grid_m is given",
+    )
+    start_grid_m: PositiveFloat | None = Field(
+        default=None,
+        description="spacing of the global start's grid (m); None: global_grid_m / 2",
+    )
     likelihood_exponent: Annotated[float, Field(gt=0.0, le=1.0)] = Field(
         default=0.5,
         description="power of each frame's likelihood (< 1 tempers it: frames' errors are "
@@ -290,6 +298,11 @@ class LocalizationConfig(Strict):
     converged_mass: Annotated[float, Field(gt=0.0, le=1.0)] = 0.9
     reflector_monitor: ReflectorMonitorConfig = ReflectorMonitorConfig()
     clutter_map: ClutterMapConfig = ClutterMapConfig()
+
+    @property
+    def start_cell_m(self) -> float:
+        """The global start's grid spacing: ``start_grid_m``, or ``global_grid_m / 2``."""
+        return self.global_grid_m / 2.0 if self.start_grid_m is None else self.start_grid_m
 
     @model_validator(mode="after")
     def _counts(self) -> LocalizationConfig:

@@ -86,7 +86,7 @@ class Amcl:
         if self.global_proposal:
             self.grid = MeasurementGrid(self._size_xy, cfg.global_grid_m, self._free)
             self.start_grid = MeasurementGrid(
-                self._size_xy, cfg.global_grid_m / 2.0, self._free, max_cells=160_000
+                self._size_xy, cfg.start_cell_m, self._free, max_cells=160_000
             )
         self.lost = self._new_lost_test()
         self._grid_loglik: np.ndarray | None = None

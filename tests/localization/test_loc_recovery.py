@@ -333,3 +333,25 @@ def test_the_lost_test_follows_the_map_without_suspects(room):
     assert amcl.lost_model.counts == amcl.model.counts != (len(world.layout),)
     assert amcl.lost_model.clutter_probability == cfg.lost_test_clutter_probability
     assert amcl.model.clutter_probability == cfg.clutter_probability
+
+
+def test_start_grid_spacing_is_its_own_setting(room):
+    """``start_grid_m``: None is today's start grid (half the lost test's spacing, the same
+    cells); a value changes the start grid only, and the start still finds the robot."""
+    world, loc = room
+    assert loc.start_grid_m is None and loc.start_cell_m == loc.global_grid_m / 2.0
+    default = Amcl(world, loc)
+    same = MeasurementGrid(default._size_xy, loc.global_grid_m / 2.0, default._free, 160_000)
+    np.testing.assert_array_equal(default.start_grid.centres_m, same.centres_m)
+    coarse_cfg = load_scenario("ipin2023").with_overrides(
+        {"reflectors": {"layout": ASYMMETRIC}, "localization": {"start_grid_m": 0.1}}
+    )
+    coarse = Amcl(world, coarse_cfg.localization)
+    np.testing.assert_array_equal(coarse.grid.centres_m, default.grid.centres_m)
+    np.testing.assert_allclose(coarse.start_grid.cell_xy_m, default.grid.cell_xy_m)
+    assert len(coarse.start_grid) == len(default.grid) < len(default.start_grid)
+    for seed in range(3):
+        errors, _ = _drive(world, coarse_cfg.localization, seed, 12)
+        assert errors[-4:].max() < 0.2, errors
+    with pytest.raises(ValueError, match="start_grid_m"):
+        load_scenario("ipin2023").with_overrides({"localization": {"start_grid_m": 0.0}})
