@@ -116,7 +116,7 @@ def test_a_quarter_metre_move_is_named_where_other_returns_crowd_its_distance(mo
     shift = 0.25 * np.array([-c[1], c[0]]) / np.linalg.norm(c)  # across the lines of sight
     judged = np.ones(4, bool)
     glrt_named = parity_named = 0
-    for seed in range(5):
+    for seed in range(20):
         glrt, parity = _glrt(), DisplacementTest(4, 0.03, 0.15, 50)
         for predicted, z, bearing, nearest in _crowded_frames(moved, shift, seed=seed):
             glrt.add(judged, predicted, z, bearing)
@@ -124,10 +124,11 @@ def test_a_quarter_metre_move_is_named_where_other_returns_crowd_its_distance(mo
         glrt_named += glrt.leader(25.0, 20.0) == moved
         parity_named += parity.leader(20.0, 10.0) == moved
         assert glrt.displacement_m[moved] == pytest.approx(shift, abs=0.08)
-    # Measured over 20 seeds per reflector: the likelihood test names 78 of 80 moves, the
-    # parity test on the nearest returns 3 (another return is nearest in many frames).
-    assert glrt_named >= 4
-    assert parity_named <= 1
+    # Measured (20 seeds for each of the four reflectors): the likelihood test names 19, 20, 19
+    # and 20, the parity test on the nearest returns 0, 2, 1 and 0 (another return is nearest
+    # in many frames).
+    assert glrt_named >= 18
+    assert parity_named <= 3
 
 
 def test_nothing_moved_stays_far_below_the_threshold_among_other_returns():
