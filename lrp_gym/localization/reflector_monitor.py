@@ -122,12 +122,19 @@ class ReflectorMonitor:
         self.visible_frames = np.zeros(m, dtype=np.int64)
         self.suspect = np.zeros(m, dtype=bool)
         cfg = self.cfg
-        if cfg.displacement_test == "parity":
-            self.displacement = DisplacementTest(
+        # The parity test runs alone, or beside the likelihood test to confirm its names.
+        parity = cfg.displacement_test == "parity" or cfg.displacement_confirm_chi2 is not None
+        self.parity = (
+            DisplacementTest(
                 m, cfg.displacement_std_m, cfg.displacement_gate_m, cfg.displacement_window_frames
             )
-        else:
-            self.displacement = DisplacementGlrt(
+            if parity
+            else None
+        )
+        self.displacement: DisplacementTest | DisplacementGlrt = (
+            self.parity
+            if cfg.displacement_test == "parity"
+            else DisplacementGlrt(
                 m,
                 cfg.displacement_std_m,
                 cfg.displacement_max_m,
@@ -135,11 +142,7 @@ class ReflectorMonitor:
                 cfg.displacement_clutter_per_m,
                 cfg.displacement_window_frames,
             )
-        self.parity = None
-        if cfg.displacement_test == "likelihood" and cfg.displacement_confirm_chi2 is not None:
-            self.parity = DisplacementTest(
-                m, cfg.displacement_std_m, cfg.displacement_gate_m, cfg.displacement_window_frames
-            )
+        )
 
     def reset(self) -> None:
         self.miss_share[:] = 0.0
@@ -149,7 +152,7 @@ class ReflectorMonitor:
         self.visible_frames[:] = 0
         self.suspect[:] = False
         self.displacement.reset()
-        if self.parity is not None:
+        if self.parity is not None and self.parity is not self.displacement:
             self.parity.reset()
 
     @property
@@ -262,16 +265,13 @@ class ReflectorMonitor:
         return bool(np.any(before != self.suspect))
 
     def _add_displacement(self, frame: MonitorFrame) -> None:
-        test = self.displacement
-        if isinstance(test, DisplacementTest):
+        if self.parity is not None:
             # Fault exclusion: a suspect's residuals would spread into its peers' parity.
-            test.add(frame.judged & ~self.suspect, frame.residual_m, frame.bearing)
-        elif frame.predicted_m is not None:
+            self.parity.add(frame.judged & ~self.suspect, frame.residual_m, frame.bearing)
+        if isinstance(self.displacement, DisplacementGlrt) and frame.predicted_m is not None:
             # A suspect keeps being judged (its statistic holds it, with hysteresis): without
             # a projection, its residuals do not spread into its peers'.
-            test.add(frame.judged, frame.predicted_m, frame.distances_m, frame.bearing)
-            if self.parity is not None:
-                self.parity.add(frame.judged & ~self.suspect, frame.residual_m, frame.bearing)
+            self.displacement.add(frame.judged, frame.predicted_m, frame.distances_m, frame.bearing)
 
     def _biased(self) -> np.ndarray:
         """Boolean (M,): suspects on their residuals, not their misses. The displacement test
@@ -287,7 +287,8 @@ class ReflectorMonitor:
             t = self.displacement.statistic
             out |= self.suspect & (t >= 0.5 * cfg.displacement_chi2)
             j = self.displacement.leader(cfg.displacement_chi2, cfg.displacement_lead, t)
-            if j is not None and self.parity is not None:
+            confirm = self.parity is not None and self.parity is not self.displacement
+            if j is not None and confirm:
                 if self.parity.statistic[j] < cfg.displacement_confirm_chi2:
                     j = None
             if j is not None:
