@@ -31,11 +31,14 @@ VARIANTS = {
         "displacement_window_frames": 50,
     },
     "misses + likelihood test, unconfirmed": {"displacement_confirm_chi2": None},
+    "misses + likelihood test, distances only (session 10)": {"displacement_doppler_std_mps": 0.0},
     "misses + likelihood test (default)": {},
 }
 
 
-def record(scenario: str, perturbation: str, severity: float, episodes: int) -> list[dict]:
+def record(
+    scenario: str, perturbation: str, severity: float, episodes: int, first_seed: int = 0
+) -> list[dict]:
     over = cell_overrides(perturbation, severity) if perturbation != "none" else {}
     over = deep_merge(over or {}, {"localization": {"reflector_monitor": {"drop_suspects": False}}})
     env = make_eval_env("pure-pursuit", "LRPRadarNavFast-v0", scenario, overrides=over)
@@ -44,14 +47,14 @@ def record(scenario: str, perturbation: str, severity: float, episodes: int) -> 
     frames: list = []
     update = rm.ReflectorMonitor.update
 
-    def recording(self, estimate, gated, others_m=None):
-        frames.append((estimate, gated, others_m))
-        return update(self, estimate, gated, others_m)
+    def recording(self, estimate, gated, others_m=None, speed_mps=None):
+        frames.append((estimate, gated, others_m, speed_mps))
+        return update(self, estimate, gated, others_m, speed_mps)
 
     rm.ReflectorMonitor.update = recording
     out = []
     try:
-        for seed in range(episodes):
+        for seed in range(first_seed, first_seed + episodes):
             policy.reset()
             obs, _ = env.reset(seed=seed)
             frames.clear()
@@ -84,9 +87,10 @@ def replay(episode: dict, changes: dict) -> dict[int, int]:
         episode["world"], episode["cfg"].model_copy(update=changes), episode["max_range_m"]
     )
     named: dict[int, int] = {}
-    for k, (estimate, gated, others) in enumerate(episode["frames"], start=1):
+    for k, (estimate, gated, others, speed) in enumerate(episode["frames"], start=1):
         # A copy of the estimate: the recorded object is the stack's own.
-        mon.update(SimpleNamespace(converged=estimate.converged, pose=estimate.pose), gated, others)
+        est = SimpleNamespace(converged=estimate.converged, pose=estimate.pose)
+        mon.update(est, gated, others, speed)
         for j in mon.suspects:
             named.setdefault(j, k)
     return named

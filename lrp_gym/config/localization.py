@@ -89,6 +89,14 @@ class ReflectorMonitorConfig(Strict):
         description="likelihood test: density of the other reflector-like distances around a "
         "reflector's, per metre (about 3 on the patrol: structure, ghosts, other reflectors)",
     )
+    displacement_doppler_std_mps: NonNegFloat = Field(
+        default=0.15,
+        description="likelihood test: std of a return's radial velocity about the one the "
+        "reflector's line of sight and the robot's wheel speed predict; a return's weight as "
+        "the reflector's own is its density there over a static scatterer's (the room's "
+        "returns near the reflector's distance come from other directions, so they move at "
+        "other radial velocities); 0 weighs the distances only",
+    )
     displacement_confirm_chi2: PositiveFloat | None = Field(
         default=6.0,
         description="likelihood test: name a reflector only if the parity test (which "

@@ -22,6 +22,15 @@ with the parity test (:mod:`lrp_gym.localization.displacement_test`), the reflec
 only if its statistic is high and ahead of every other reflector's (a moved reflector pulls
 the estimate, so some of its residual shows at the others).
 
+With a radial velocity per return (``doppler_std_mps`` > 0 and the robot's wheel speed), each
+candidate's range density is multiplied by the density of its radial velocity under the
+reflector's own line of sight over that of a static scatterer anywhere (the model of
+:func:`~lrp_gym.localization.likelihood_terms.clutter_velocity_density`): the structure
+returns that crowd a reflector's distance lie in other directions (ceiling, wall feet,
+corners), so at driving speed they move at other radial velocities. The velocity a reflector
+is predicted to have is that of its mapped position: a move of a few decimetres turns the line
+of sight by a few degrees, a change far inside the velocity noise.
+
 The residuals are taken from the estimate as it is (no position error removed): correcting
 each frame with the position the other reflectors' returns imply took their wrong
 associations in (docs/robustness.md). So a biased estimate (wheel slip: 5-10 cm behind) looks
@@ -34,6 +43,7 @@ from __future__ import annotations
 import numpy as np
 
 from lrp_gym.localization.displacement_test import leading_reflector
+from lrp_gym.localization.likelihood_terms import clutter_velocity_density
 
 _SQRT_2PI = float(np.sqrt(2.0 * np.pi))
 
@@ -71,6 +81,14 @@ class DisplacementGlrt:
         reflectors), so that a reflector moved mid-episode is seen as it is now.
     step_m : float
         Grid spacing of the hypotheses.
+    doppler_std_mps : float
+        Std of a reflector's measured radial velocity about its predicted one; 0 weighs the
+        distances only.
+    doppler_outlier_probability : float
+        Probability that a return's velocity is unrelated to its own (a wrong Doppler peak),
+        uniform over the radar's unambiguous interval.
+    max_velocity_mps : float
+        The radar's unambiguous radial velocity.
 
     Attributes
     ----------
@@ -89,8 +107,14 @@ class DisplacementGlrt:
         clutter_per_m: float,
         window_frames: int,
         step_m: float = 0.025,
+        doppler_std_mps: float = 0.0,
+        doppler_outlier_probability: float = 0.1,
+        max_velocity_mps: float = 5.0,
     ) -> None:
         self.std_m = float(std_m)
+        self.doppler_std_mps = float(doppler_std_mps)
+        self.doppler_outlier_probability = float(doppler_outlier_probability)
+        self.velocity_uniform = 0.5 / float(max_velocity_mps)
         self.detection_probability = float(detection_probability)
         self.clutter_per_m = float(clutter_per_m)
         self.keep = 1.0 - 1.0 / float(window_frames)
@@ -109,27 +133,52 @@ class DisplacementGlrt:
         predicted_m: np.ndarray,
         distances_m: np.ndarray,
         bearing: np.ndarray,
+        velocities_mps: np.ndarray | None = None,
+        velocity_xy: np.ndarray | None = None,
     ) -> None:
         """Add one frame: ``judged`` (M,) bool, ``predicted_m`` (M,) the reflectors'
         distances from the estimate, ``distances_m`` (Z,) every reflector-like distance of
         the frame (all types), ``bearing`` (M, 2) the horizontal unit vectors from the radar
-        to the reflectors (d distance / d reflector xy)."""
+        to the reflectors (d distance / d reflector xy). With ``velocities_mps`` (Z,), the
+        distances' radial velocities, and ``velocity_xy`` (2,), the robot's estimated
+        velocity over the floor, the Doppler weighs the candidates too."""
         idx = np.flatnonzero(judged)
         if len(idx) < 3:  # the others do not vouch for the pose
             return
         self.log_lr *= self.keep
         diff = np.asarray(distances_m, dtype=float)[None, :] - predicted_m[idx, None]
         near = np.abs(diff) <= self.reach_m
-        diff = np.where(near, diff, np.inf)[:, near.any(axis=0)]  # (J, Z')
+        cols = near.any(axis=0)
+        diff = np.where(near, diff, np.inf)[:, cols]  # (J, Z')
+        weight = None
+        if self.doppler_std_mps > 0.0 and velocities_mps is not None and velocity_xy is not None:
+            # A static point's radial velocity is -v . u (u: unit vector from the radar).
+            expected = -bearing[idx] @ np.asarray(velocity_xy, dtype=float)
+            measured = np.asarray(velocities_mps, dtype=float)[cols]
+            weight = self._doppler_ratio(measured[None, :] - expected[:, None], velocity_xy)
         shift = bearing[idx] @ self.offsets_m.T  # (J, G): u . d
-        self.log_lr[idx] += self._terms(diff, shift)
+        self.log_lr[idx] += self._terms(diff, shift, weight)
 
-    def _terms(self, diff: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    def _doppler_ratio(self, dv: np.ndarray, velocity_xy: np.ndarray) -> np.ndarray:
+        """Density of velocity residuals ``dv`` (J, Z) under a reflector's own return over
+        that of a static scatterer's radial velocity at this speed."""
+        s, q = self.doppler_std_mps, self.doppler_outlier_probability
+        own = (1.0 - q) * np.exp(-0.5 * (dv / s) ** 2) / (_SQRT_2PI * s) + q * self.velocity_uniform
+        speed = float(np.hypot(*velocity_xy))
+        return own / clutter_velocity_density(speed, s, self.velocity_uniform)
+
+    def _terms(
+        self, diff: np.ndarray, shift: np.ndarray, weight: np.ndarray | None = None
+    ) -> np.ndarray:
         """One frame's log-likelihood terms (J, G) of the hypotheses, up to a constant per
         reflector: ``diff`` (J, Z) candidates minus predicted distances, ``shift`` (J, G) the
-        offsets ``u . d`` the hypotheses predict."""
+        offsets ``u . d`` the hypotheses predict, ``weight`` (J, Z) each candidate's Doppler
+        density ratio (None: 1)."""
         z = (diff[:, None, :] - shift[:, :, None]) / self.std_m
-        density = np.exp(-0.5 * z * z).sum(axis=2) / (_SQRT_2PI * self.std_m)
+        g = np.exp(-0.5 * z * z)
+        if weight is not None:
+            g *= weight[:, None, :]
+        density = g.sum(axis=2) / (_SQRT_2PI * self.std_m)
         p_d = self.detection_probability
         return np.log((1.0 - p_d) + p_d * density / self.clutter_per_m)
 

@@ -75,6 +75,14 @@ class MonitorFrame:
         The reflectors' predicted distances.
     distances_m : ndarray (Z,)
         Every reflector-like distance of the frame, all types.
+    velocities_mps : ndarray (Z,), optional
+        Their radial velocities (None: the source measures none).
+    velocity_xy : ndarray (2,), optional
+        The robot's velocity over the floor: wheel speed along the estimated heading (None:
+        no speed given).
+    parity_residual_m : ndarray (M,), optional
+        The residuals the parity test takes: of the nearest return whose radial velocity fits
+        the reflector's (the nearest one if none does); None: ``residual_m``.
     """
 
     judged: np.ndarray
@@ -82,6 +90,9 @@ class MonitorFrame:
     bearing: np.ndarray | None = None
     predicted_m: np.ndarray | None = None
     distances_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    velocities_mps: np.ndarray | None = None
+    velocity_xy: np.ndarray | None = None
+    parity_residual_m: np.ndarray | None = None
 
 
 @dataclass
@@ -141,6 +152,8 @@ class ReflectorMonitor:
                 cfg.displacement_detection_probability,
                 cfg.displacement_clutter_per_m,
                 cfg.displacement_window_frames,
+                doppler_std_mps=cfg.displacement_doppler_std_mps,
+                max_velocity_mps=self.world.fmcw.max_velocity_mps,
             )
         )
 
@@ -184,17 +197,26 @@ class ReflectorMonitor:
         return dist, ok, bearing
 
     def update(
-        self, estimate: PoseEstimate, gated: Fingerprint, others_m: np.ndarray | None = None
+        self,
+        estimate: PoseEstimate,
+        gated: Fingerprint,
+        others_m: np.ndarray | None = None,
+        speed_mps: float | None = None,
     ) -> bool:
         """Add one frame (``gated``: this frame's detections in each type's window); returns
         whether the suspect set changed. Frames without a converged estimate are skipped.
         ``others_m``: predicted distances of other known static returns (the clutter map's
-        points), which a reflector's return merges with just as with another reflector's."""
-        frame = self.observe(estimate, gated, others_m)
+        points), which a reflector's return merges with just as with another reflector's.
+        ``speed_mps``: the robot's signed forward (wheel) speed, for the Doppler."""
+        frame = self.observe(estimate, gated, others_m, speed_mps)
         return False if frame is None else self.accumulate(frame)
 
     def observe(
-        self, estimate: PoseEstimate, gated: Fingerprint, others_m: np.ndarray | None = None
+        self,
+        estimate: PoseEstimate,
+        gated: Fingerprint,
+        others_m: np.ndarray | None = None,
+        speed_mps: float | None = None,
     ) -> MonitorFrame | None:
         """One frame's evidence, without adding it (see :meth:`update`); None when the
         frame judges no reflector (or is not converged)."""
@@ -213,7 +235,33 @@ class ReflectorMonitor:
         if not seen.any():
             return None
         z = np.concatenate([np.zeros(0), *gated.distances_m])
-        return MonitorFrame(seen, self._nearest_residuals(predicted, z), bearing, predicted, z)
+        vel = velocity_xy = None
+        if gated.velocities_mps is not None and speed_mps is not None:
+            vel = np.concatenate([np.zeros(0), *gated.velocities_mps])
+            heading = float(estimate.pose[2])
+            velocity_xy = float(speed_mps) * np.array([np.cos(heading), np.sin(heading)])
+        residual = self._nearest_residuals(predicted, z)
+        parity = None
+        if vel is not None and self.cfg.displacement_doppler_std_mps > 0 and len(z):
+            parity = self._doppler_residuals(predicted, z, vel, -bearing @ velocity_xy)
+        return MonitorFrame(seen, residual, bearing, predicted, z, vel, velocity_xy, parity)
+
+    def _doppler_residuals(
+        self, predicted: np.ndarray, z: np.ndarray, vel: np.ndarray, expected_v: np.ndarray
+    ) -> np.ndarray:
+        """Per reflector, the residual of the nearest return whose radial velocity is within
+        three sigmas of the reflector's predicted one; the nearest return's if none is."""
+        diff = z[None, :] - predicted[:, None]
+        fits = (
+            np.abs(vel[None, :] - expected_v[:, None])
+            <= 3.0 * self.cfg.displacement_doppler_std_mps
+        )
+        cost = np.where(fits, np.abs(diff), np.inf)
+        best = np.argmin(cost, axis=1)
+        rows = np.arange(len(predicted))
+        nearest = np.argmin(np.abs(diff), axis=1)
+        pick = np.where(np.isfinite(cost[rows, best]), best, nearest)
+        return diff[rows, pick]
 
     def accumulate(self, frame: MonitorFrame) -> bool:
         """Add one frame's evidence (what :meth:`observe` returns); returns whether the
@@ -267,11 +315,19 @@ class ReflectorMonitor:
     def _add_displacement(self, frame: MonitorFrame) -> None:
         if self.parity is not None:
             # Fault exclusion: a suspect's residuals would spread into its peers' parity.
-            self.parity.add(frame.judged & ~self.suspect, frame.residual_m, frame.bearing)
+            r = frame.residual_m if frame.parity_residual_m is None else frame.parity_residual_m
+            self.parity.add(frame.judged & ~self.suspect, r, frame.bearing)
         if isinstance(self.displacement, DisplacementGlrt) and frame.predicted_m is not None:
             # A suspect keeps being judged (its statistic holds it, with hysteresis): without
             # a projection, its residuals do not spread into its peers'.
-            self.displacement.add(frame.judged, frame.predicted_m, frame.distances_m, frame.bearing)
+            self.displacement.add(
+                frame.judged,
+                frame.predicted_m,
+                frame.distances_m,
+                frame.bearing,
+                frame.velocities_mps,
+                frame.velocity_xy,
+            )
 
     def _biased(self) -> np.ndarray:
         """Boolean (M,): suspects on their residuals, not their misses. The displacement test
