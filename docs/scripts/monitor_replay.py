@@ -47,9 +47,9 @@ def record(
     frames: list = []
     update = rm.ReflectorMonitor.update
 
-    def recording(self, estimate, gated, others_m=None, speed_mps=None):
-        frames.append((estimate, gated, others_m, speed_mps))
-        return update(self, estimate, gated, others_m, speed_mps)
+    def recording(self, estimate, gated, others_m=None, speed_mps=None, detections=None):
+        frames.append((estimate, gated, others_m, speed_mps, detections))
+        return update(self, estimate, gated, others_m, speed_mps, detections)
 
     rm.ReflectorMonitor.update = recording
     out = []
@@ -87,10 +87,10 @@ def replay(episode: dict, changes: dict) -> dict[int, int]:
         episode["world"], episode["cfg"].model_copy(update=changes), episode["max_range_m"]
     )
     named: dict[int, int] = {}
-    for k, (estimate, gated, others, speed) in enumerate(episode["frames"], start=1):
+    for k, (estimate, gated, others, speed, detections) in enumerate(episode["frames"], start=1):
         # A copy of the estimate: the recorded object is the stack's own.
         est = SimpleNamespace(converged=estimate.converged, pose=estimate.pose)
-        mon.update(est, gated, others, speed)
+        mon.update(est, gated, others, speed, detections)
         for j in mon.suspects:
             named.setdefault(j, k)
     return named

@@ -30,16 +30,15 @@ sys.path.insert(0, str(Path(__file__).parent))
 from monitor_replay import record  # noqa: E402
 
 from lrp_gym.experiments.robustness import SUSPECT_BUDGET_FRAMES  # noqa: E402
-from lrp_gym.localization.reflector_monitor import MonitorFrame, ReflectorMonitor  # noqa: E402
+from lrp_gym.localization.monitor_frame import MonitorFrame, nearest_residuals  # noqa: E402
+from lrp_gym.localization.reflector_monitor import ReflectorMonitor  # noqa: E402
 
 VERSIONS = ("ideal", "estimate, own", "estimate, own, others", "true pose, real", "real")
 
 
 def _frame(predicted, judged, bearing, z) -> MonitorFrame:
     z = np.sort(z)
-    return MonitorFrame(
-        judged, ReflectorMonitor._nearest_residuals(predicted, z), bearing, predicted, z
-    )
+    return MonitorFrame(judged, nearest_residuals(predicted, z), bearing, predicted, z)
 
 
 def decompose(ep: dict, rng: np.random.Generator) -> dict[str, list[float]]:
@@ -52,13 +51,13 @@ def decompose(ep: dict, rng: np.random.Generator) -> dict[str, list[float]]:
     mons = {v: ReflectorMonitor(world, ep["cfg"], ep["max_range_m"]) for v in VERSIONS}
     out: dict[str, list[float]] = {v: [] for v in VERSIONS}
     frames = zip(ep["frames"][:SUSPECT_BUDGET_FRAMES], ep["true_poses"], strict=False)
-    for k, ((est, gated, others, speed), pose) in enumerate(frames, start=1):
+    for k, ((est, gated, others, speed, det), pose) in enumerate(frames, start=1):
         radar = world.radar_position(np.asarray(pose[:2], float))
         own = np.linalg.norm(true_pos - radar, axis=1) + rng.normal(0.0, 0.026, len(true_pos))
         predicted, seen, bearing = mons["ideal"]._geometry(pose[:2])
         mons["ideal"].accumulate(_frame(predicted, seen, bearing, own[seen]))
         real = mons["real"].observe(
-            SimpleNamespace(converged=est.converged, pose=est.pose), gated, others, speed
+            SimpleNamespace(converged=est.converged, pose=est.pose), gated, others, speed, det
         )
         if real is not None:
             mons["real"].accumulate(real)
@@ -69,7 +68,7 @@ def decompose(ep: dict, rng: np.random.Generator) -> dict[str, list[float]]:
             z = np.concatenate([rest, own[j : j + 1]]) if judged[j] else z
             mons["estimate, own, others"].accumulate(_frame(p, judged, b, z))
         true_view = SimpleNamespace(converged=est.converged, pose=np.asarray(pose))
-        frame = mons["true pose, real"].observe(true_view, gated, others, speed)
+        frame = mons["true pose, real"].observe(true_view, gated, others, speed, det)
         if frame is not None:
             mons["true pose, real"].accumulate(frame)
         if k % 5 == 0:

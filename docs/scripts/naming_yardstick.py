@@ -22,7 +22,8 @@ sys.path.insert(0, str(Path(__file__).parent))
 from monitor_replay import record, replay  # noqa: E402
 
 from lrp_gym.experiments.robustness import SUSPECT_BUDGET_FRAMES  # noqa: E402
-from lrp_gym.localization.reflector_monitor import MonitorFrame, ReflectorMonitor  # noqa: E402
+from lrp_gym.localization.monitor_frame import MonitorFrame, nearest_residuals  # noqa: E402
+from lrp_gym.localization.reflector_monitor import ReflectorMonitor  # noqa: E402
 
 
 def ideal_named(ep: dict, rng: np.random.Generator) -> tuple[bool, bool]:
@@ -42,9 +43,7 @@ def ideal_named(ep: dict, rng: np.random.Generator) -> tuple[bool, bool]:
         radar = world.radar_position(np.asarray(pose[:2], float))
         measured = np.linalg.norm(true_pos - radar, axis=1) + rng.normal(0, 0.026, len(seen))
         z = np.sort(measured[seen])  # only the reflectors in view answer
-        frame = MonitorFrame(
-            seen, ReflectorMonitor._nearest_residuals(predicted, z), bearing, predicted, z
-        )
+        frame = MonitorFrame(seen, nearest_residuals(predicted, z), bearing, predicted, z)
         for k, mon in enumerate(monitors):
             mon.accumulate(frame)
             named[k] |= bool(set(mon.suspects) & ep["moved"])

@@ -45,7 +45,7 @@ surveying the room learns which reflector to check (``info["suspect_reflectors"]
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -53,46 +53,16 @@ from lrp_gym.config.localization import LocalizationConfig, ReflectorMonitorConf
 from lrp_gym.localization.displacement_glrt import DisplacementGlrt
 from lrp_gym.localization.displacement_test import DisplacementTest
 from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.localization.monitor_frame import (
+    MonitorFrame,
+    doppler_residuals,
+    masked_by_stronger,
+    nearest_residuals,
+)
 from lrp_gym.localization.pose_estimate import PoseEstimate
+from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
-
-
-@dataclass(frozen=True)
-class MonitorFrame:
-    """What one converged frame shows the monitor (:meth:`ReflectorMonitor.observe`).
-
-    Attributes
-    ----------
-    judged : ndarray (M,) of bool
-        The reflectors this frame judges (visible and resolvable).
-    residual_m : ndarray (M,)
-        Nearest reflector-like distance minus each one's predicted distance (inf without any).
-    bearing : ndarray (M, 2), optional
-        Horizontal unit vectors from the estimated radar position to the reflectors; without
-        them the displacement test does not see the frame.
-    predicted_m : ndarray (M,), optional
-        The reflectors' predicted distances.
-    distances_m : ndarray (Z,)
-        Every reflector-like distance of the frame, all types.
-    velocities_mps : ndarray (Z,), optional
-        Their radial velocities (None: the source measures none).
-    velocity_xy : ndarray (2,), optional
-        The robot's velocity over the floor: wheel speed along the estimated heading (None:
-        no speed given).
-    parity_residual_m : ndarray (M,), optional
-        The residuals the parity test takes: of the nearest return whose radial velocity fits
-        the reflector's (the nearest one if none does); None: ``residual_m``.
-    """
-
-    judged: np.ndarray
-    residual_m: np.ndarray
-    bearing: np.ndarray | None = None
-    predicted_m: np.ndarray | None = None
-    distances_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    velocities_mps: np.ndarray | None = None
-    velocity_xy: np.ndarray | None = None
-    parity_residual_m: np.ndarray | None = None
 
 
 @dataclass
@@ -202,13 +172,16 @@ class ReflectorMonitor:
         gated: Fingerprint,
         others_m: np.ndarray | None = None,
         speed_mps: float | None = None,
+        detections: Detections | None = None,
     ) -> bool:
         """Add one frame (``gated``: this frame's detections in each type's window); returns
         whether the suspect set changed. Frames without a converged estimate are skipped.
         ``others_m``: predicted distances of other known static returns (the clutter map's
         points), which a reflector's return merges with just as with another reflector's.
-        ``speed_mps``: the robot's signed forward (wheel) speed, for the Doppler."""
-        frame = self.observe(estimate, gated, others_m, speed_mps)
+        ``speed_mps``: the robot's signed forward (wheel) speed, for the Doppler.
+        ``detections``: all of the frame's detections, whose RCS tells where a much stronger
+        return may hide a reflector."""
+        frame = self.observe(estimate, gated, others_m, speed_mps, detections)
         return False if frame is None else self.accumulate(frame)
 
     def observe(
@@ -217,6 +190,7 @@ class ReflectorMonitor:
         gated: Fingerprint,
         others_m: np.ndarray | None = None,
         speed_mps: float | None = None,
+        detections: Detections | None = None,
     ) -> MonitorFrame | None:
         """One frame's evidence, without adding it (see :meth:`update`); None when the
         frame judges no reflector (or is not converged)."""
@@ -232,6 +206,15 @@ class ReflectorMonitor:
         if others_m is not None and len(others_m):
             gap = np.hstack([gap, np.abs(predicted[:, None] - np.asarray(others_m)[None, :])])
         seen &= gap.min(axis=1) >= 2.0 * self.world.fmcw.range_resolution_m
+        cfg = self.cfg
+        if detections is not None and cfg.mask_excess_db is not None:
+            # Nor does a frame in which a much stronger return may hide the reflector.
+            radar = self.world.radar_position(np.asarray(estimate.pose[:2], dtype=float))
+            rcs_dbsm = 10.0 * np.log10(np.maximum(self.world.layout.effective_rcs_m2(radar), 1e-12))
+            gate_m = cfg.gate_sigmas * cfg.range_std_m
+            seen &= ~masked_by_stronger(
+                predicted, rcs_dbsm, detections, gate_m, cfg.mask_window_m, cfg.mask_excess_db
+            )
         if not seen.any():
             return None
         z = np.concatenate([np.zeros(0), *gated.distances_m])
@@ -240,28 +223,12 @@ class ReflectorMonitor:
             vel = np.concatenate([np.zeros(0), *gated.velocities_mps])
             heading = float(estimate.pose[2])
             velocity_xy = float(speed_mps) * np.array([np.cos(heading), np.sin(heading)])
-        residual = self._nearest_residuals(predicted, z)
+        residual = nearest_residuals(predicted, z)
         parity = None
-        if vel is not None and self.cfg.displacement_doppler_std_mps > 0 and len(z):
-            parity = self._doppler_residuals(predicted, z, vel, -bearing @ velocity_xy)
+        v_std = self.cfg.displacement_doppler_std_mps
+        if vel is not None and v_std > 0 and len(z):
+            parity = doppler_residuals(predicted, z, vel, -bearing @ velocity_xy, 3.0 * v_std)
         return MonitorFrame(seen, residual, bearing, predicted, z, vel, velocity_xy, parity)
-
-    def _doppler_residuals(
-        self, predicted: np.ndarray, z: np.ndarray, vel: np.ndarray, expected_v: np.ndarray
-    ) -> np.ndarray:
-        """Per reflector, the residual of the nearest return whose radial velocity is within
-        three sigmas of the reflector's predicted one; the nearest return's if none is."""
-        diff = z[None, :] - predicted[:, None]
-        fits = (
-            np.abs(vel[None, :] - expected_v[:, None])
-            <= 3.0 * self.cfg.displacement_doppler_std_mps
-        )
-        cost = np.where(fits, np.abs(diff), np.inf)
-        best = np.argmin(cost, axis=1)
-        rows = np.arange(len(predicted))
-        nearest = np.argmin(np.abs(diff), axis=1)
-        pick = np.where(np.isfinite(cost[rows, best]), best, nearest)
-        return diff[rows, pick]
 
     def accumulate(self, frame: MonitorFrame) -> bool:
         """Add one frame's evidence (what :meth:`observe` returns); returns whether the
@@ -365,17 +332,6 @@ class ReflectorMonitor:
         """
         p = self.common_share
         return excess >= self.cfg.excess_z * np.sqrt(p * (1.0 - p) * self.null_var)
-
-    @staticmethod
-    def _nearest_residuals(predicted: np.ndarray, z: np.ndarray) -> np.ndarray:
-        """Per reflector, the nearest of the reflector-like measured distances ``z`` minus
-        the predicted one (inf without any). Distances of every type count: a weak return's
-        RCS estimate scatters, and the tracker may give a small reflector's return to another
-        type."""
-        if len(z) == 0:
-            return np.full(len(predicted), np.inf)
-        diff = z[None, :] - predicted[:, None]
-        return diff[np.arange(len(predicted)), np.argmin(np.abs(diff), axis=1)]
 
 
 def model_without(
