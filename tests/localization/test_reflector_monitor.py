@@ -9,8 +9,8 @@ import pytest
 import lrp_gym  # noqa: F401  (registers the envs)
 from agents.pure_pursuit import PurePursuitPolicy
 from lrp_gym.config import ReflectorMonitorConfig, load_scenario
-from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.localization.monitor_frame import MonitorFrame, masked_by_stronger
+from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.localization.reflector_monitor import ReflectorMonitor
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
