@@ -243,10 +243,9 @@ class Amcl:
         vel = particle_velocities(self.particles, speed_mps)
         xy = self.particles[:, :2]
         returns = None if self._pending_global else self.model.map_returns_at(xy, fingerprint, vel)
-        self._grid_loglik, self._grid_frame = None, fingerprint  # the grid: lazily for recovery
-        if self.global_proposal and self._pending_global:
-            self._grid_loglik = self.grid.log_likelihood(self.lost_model, fingerprint)
-        elif self.global_proposal:
+        # The grid: lazily for recovery (at a global start only an injection uses it).
+        self._grid_loglik, self._grid_frame = None, fingerprint
+        if self.global_proposal and not self._pending_global:
             # lost_test_every > 1: the test (and its grid) may skip quiet frames
             marginal = self._cloud_marginal(fingerprint, w, returns)
             quiet = self._converged and self.p_random == 0.0
