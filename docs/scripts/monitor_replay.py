@@ -1,18 +1,13 @@
 """Replay the reflector monitor with other settings on the same recorded frames.
 
 Runs EPISODES patrol episodes of one robustness cell (pure pursuit, detections fidelity,
-seeds FIRST_SEED..FIRST_SEED+EPISODES-1, FIRST_SEED 0 unless given, the monitor's
-``drop_suspects`` off so that its verdicts do not change the trajectory), records what the
-monitor saw on every frame (estimate, gated distances, clutter map points, wheel speed), then
-replays a fresh monitor per variant on those frames. Prints, per variant,
+seeds 0..EPISODES-1, the monitor's ``drop_suspects`` off so that its verdicts do not change the
+trajectory), records what the monitor saw on every frame (estimate, gated distances, clutter
+map points), then replays a fresh monitor per variant on those frames. Prints, per variant,
 the episodes naming the moved reflector within 40 frames and the episodes naming another one.
 
     python docs/scripts/monitor_replay.py ipin2023-patrol displaced_reflector 0.25 20
     python docs/scripts/monitor_replay.py ipin2023-2types-patrol clutter 0.5 20
-    python docs/scripts/monitor_replay.py ipin2023-patrol displaced_reflector 0.25 50 100
-
-The settings of session 11 (the Doppler weight) were chosen on seeds 100 and up. The 50-episode matrix runs seeds 0-49: until its monitor names a reflector, its
-trajectories are those recorded here, so a replay of those seeds gives the matrix's first name.
 """
 
 from __future__ import annotations
@@ -52,9 +47,9 @@ def record(
     frames: list = []
     update = rm.ReflectorMonitor.update
 
-    def recording(self, estimate, gated, others_m=None, speed_mps=None):
-        frames.append((estimate, gated, others_m, speed_mps))
-        return update(self, estimate, gated, others_m, speed_mps)
+    def recording(self, estimate, gated, others_m=None, speed_mps=None, detections=None):
+        frames.append((estimate, gated, others_m, speed_mps, detections))
+        return update(self, estimate, gated, others_m, speed_mps, detections)
 
     rm.ReflectorMonitor.update = recording
     out = []
@@ -92,19 +87,17 @@ def replay(episode: dict, changes: dict) -> dict[int, int]:
         episode["world"], episode["cfg"].model_copy(update=changes), episode["max_range_m"]
     )
     named: dict[int, int] = {}
-    for k, (estimate, gated, others, speed) in enumerate(episode["frames"], start=1):
+    for k, (estimate, gated, others, speed, detections) in enumerate(episode["frames"], start=1):
         # A copy of the estimate: the recorded object is the stack's own.
         est = SimpleNamespace(converged=estimate.converged, pose=estimate.pose)
-        mon.update(est, gated, others, speed)
+        mon.update(est, gated, others, speed, detections)
         for j in mon.suspects:
             named.setdefault(j, k)
     return named
 
 
-def main(
-    scenario: str, perturbation: str, severity: float, episodes: int, first_seed: int = 0
-) -> None:
-    recorded = record(scenario, perturbation, severity, episodes, first_seed)
+def main(scenario: str, perturbation: str, severity: float, episodes: int) -> None:
+    recorded = record(scenario, perturbation, severity, episodes)
     print(f"{scenario}, {perturbation} {severity:g}, {episodes} episodes")
     for name, changes in VARIANTS.items():
         right = wrong = 0
@@ -116,5 +109,4 @@ def main(
 
 
 if __name__ == "__main__":
-    first = int(sys.argv[5]) if len(sys.argv) > 5 else 0
-    main(sys.argv[1], sys.argv[2], float(sys.argv[3]), int(sys.argv[4]), first)
+    main(sys.argv[1], sys.argv[2], float(sys.argv[3]), int(sys.argv[4]))

@@ -51,13 +51,13 @@ def decompose(ep: dict, rng: np.random.Generator) -> dict[str, list[float]]:
     mons = {v: ReflectorMonitor(world, ep["cfg"], ep["max_range_m"]) for v in VERSIONS}
     out: dict[str, list[float]] = {v: [] for v in VERSIONS}
     frames = zip(ep["frames"][:SUSPECT_BUDGET_FRAMES], ep["true_poses"], strict=False)
-    for k, ((est, gated, others, speed), pose) in enumerate(frames, start=1):
+    for k, ((est, gated, others, speed, det), pose) in enumerate(frames, start=1):
         radar = world.radar_position(np.asarray(pose[:2], float))
         own = np.linalg.norm(true_pos - radar, axis=1) + rng.normal(0.0, 0.026, len(true_pos))
         predicted, seen, bearing = mons["ideal"]._geometry(pose[:2])
         mons["ideal"].accumulate(_frame(predicted, seen, bearing, own[seen]))
         real = mons["real"].observe(
-            SimpleNamespace(converged=est.converged, pose=est.pose), gated, others, speed
+            SimpleNamespace(converged=est.converged, pose=est.pose), gated, others, speed, det
         )
         if real is not None:
             mons["real"].accumulate(real)
@@ -68,7 +68,7 @@ def decompose(ep: dict, rng: np.random.Generator) -> dict[str, list[float]]:
             z = np.concatenate([rest, own[j : j + 1]]) if judged[j] else z
             mons["estimate, own, others"].accumulate(_frame(p, judged, b, z))
         true_view = SimpleNamespace(converged=est.converged, pose=np.asarray(pose))
-        frame = mons["true pose, real"].observe(true_view, gated, others, speed)
+        frame = mons["true pose, real"].observe(true_view, gated, others, speed, det)
         if frame is not None:
             mons["true pose, real"].accumulate(frame)
         if k % 5 == 0:

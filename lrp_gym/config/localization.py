@@ -126,6 +126,17 @@ class ReflectorMonitorConfig(Strict):
         "measurement_std_m): ghosts and room returns crowd the reflector band, so the gate "
         "must be as tight as the radar allows",
     )
+    mask_excess_db: float | None = Field(
+        default=10.0,
+        description="a frame does not judge a reflector when a detection this many dB stronger "
+        "than the reflector's expected RCS lies within mask_window_m of its distance (outside "
+        "the gate): such a return can hide it (CFAR, peak search), and a masked reflector "
+        "looks missing or moved; None: off",
+    )
+    mask_window_m: PositiveFloat = Field(
+        default=0.3,
+        description="how far from a reflector's distance a much stronger return can hide it",
+    )
     min_gain: Fraction = Field(
         default=0.25,
         description="share of its peak RCS a reflector must show the radar to count as visible",

@@ -7,6 +7,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lrp_gym.radar.detections import Detections
+
 
 @dataclass(frozen=True)
 class MonitorFrame:
@@ -15,7 +17,8 @@ class MonitorFrame:
     Attributes
     ----------
     judged : ndarray (M,) of bool
-        The reflectors this frame judges (visible and resolvable).
+        The reflectors this frame judges (visible, resolvable, not hidden by a much stronger
+        return: :func:`masked_by_stronger`).
     residual_m : ndarray (M,)
         Nearest reflector-like distance minus each one's predicted distance (inf without any).
     bearing : ndarray (M, 2), optional
@@ -72,3 +75,25 @@ def doppler_residuals(
     best = np.argmin(cost, axis=1)
     pick = np.where(np.isfinite(cost[rows, best]), best, np.argmin(np.abs(diff), axis=1))
     return diff[rows, pick]
+
+
+def masked_by_stronger(
+    predicted: np.ndarray,
+    expected_rcs_dbsm: np.ndarray,
+    detections: Detections,
+    gate_m: float,
+    window_m: float,
+    excess_db: float,
+) -> np.ndarray:
+    """Boolean (M,): a detection (of any kind) between ``gate_m`` and ``window_m`` from the
+    reflector's predicted distance whose RCS exceeds the reflector's expected one
+    (``expected_rcs_dbsm``, its pattern at this aspect) by ``excess_db``.
+
+    A strong scatterer a few range cells from a weak reflector hides it: its skirt and its
+    share of the CFAR's training cells raise the threshold there, and the peak search keeps the
+    stronger maximum. Such a frame cannot tell a missing reflector from a masked one. Returns
+    within the gate are the reflector's own (or answer for it): they never mask it.
+    """
+    dr = np.abs(detections.range_m[None, :] - predicted[:, None])
+    strong = detections.rcs_dbsm[None, :] >= expected_rcs_dbsm[:, None] + excess_db
+    return np.any(strong & (dr > gate_m) & (dr <= window_m), axis=1)

@@ -56,9 +56,11 @@ from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.monitor_frame import (
     MonitorFrame,
     doppler_residuals,
+    masked_by_stronger,
     nearest_residuals,
 )
 from lrp_gym.localization.pose_estimate import PoseEstimate
+from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
 
@@ -170,13 +172,16 @@ class ReflectorMonitor:
         gated: Fingerprint,
         others_m: np.ndarray | None = None,
         speed_mps: float | None = None,
+        detections: Detections | None = None,
     ) -> bool:
         """Add one frame (``gated``: this frame's detections in each type's window); returns
         whether the suspect set changed. Frames without a converged estimate are skipped.
         ``others_m``: predicted distances of other known static returns (the clutter map's
         points), which a reflector's return merges with just as with another reflector's.
-        ``speed_mps``: the robot's signed forward (wheel) speed, for the Doppler."""
-        frame = self.observe(estimate, gated, others_m, speed_mps)
+        ``speed_mps``: the robot's signed forward (wheel) speed, for the Doppler.
+        ``detections``: all of the frame's detections, whose RCS tells where a much stronger
+        return may hide a reflector."""
+        frame = self.observe(estimate, gated, others_m, speed_mps, detections)
         return False if frame is None else self.accumulate(frame)
 
     def observe(
@@ -185,6 +190,7 @@ class ReflectorMonitor:
         gated: Fingerprint,
         others_m: np.ndarray | None = None,
         speed_mps: float | None = None,
+        detections: Detections | None = None,
     ) -> MonitorFrame | None:
         """One frame's evidence, without adding it (see :meth:`update`); None when the
         frame judges no reflector (or is not converged)."""
@@ -200,6 +206,15 @@ class ReflectorMonitor:
         if others_m is not None and len(others_m):
             gap = np.hstack([gap, np.abs(predicted[:, None] - np.asarray(others_m)[None, :])])
         seen &= gap.min(axis=1) >= 2.0 * self.world.fmcw.range_resolution_m
+        cfg = self.cfg
+        if detections is not None and cfg.mask_excess_db is not None:
+            # Nor does a frame in which a much stronger return may hide the reflector.
+            radar = self.world.radar_position(np.asarray(estimate.pose[:2], dtype=float))
+            rcs_dbsm = 10.0 * np.log10(np.maximum(self.world.layout.effective_rcs_m2(radar), 1e-12))
+            gate_m = cfg.gate_sigmas * cfg.range_std_m
+            seen &= ~masked_by_stronger(
+                predicted, rcs_dbsm, detections, gate_m, cfg.mask_window_m, cfg.mask_excess_db
+            )
         if not seen.any():
             return None
         z = np.concatenate([np.zeros(0), *gated.distances_m])

@@ -293,7 +293,7 @@ class LocalizationStack:
             detections = frame
             fingerprint, estimate = self._track_and_localize(frame, ego, rng)
         self.converged = bool(estimate.converged)
-        suspects = self._check_reflectors(estimate, ego) if detections is not None else ()
+        suspects = () if detections is None else self._check_reflectors(estimate, ego, detections)
         t1 = time.perf_counter()
         lut_estimate, pose_estimate = self._with_lut(fingerprint, estimate)
         elapsed = {"tracking_localization": t1 - t0, "lut": time.perf_counter() - t1}
@@ -301,7 +301,9 @@ class LocalizationStack:
             detections, fingerprint, estimate, lut_estimate, pose_estimate, elapsed, suspects
         )
 
-    def _check_reflectors(self, estimate: PoseEstimate, ego: EgoMotion) -> tuple[int, ...]:
+    def _check_reflectors(
+        self, estimate: PoseEstimate, ego: EgoMotion, detections: Detections
+    ) -> tuple[int, ...]:
         """Feed the reflector monitor this frame's gated detections; when its suspects change
         (and ``drop_suspects``), the localiser gets the map without them."""
         monitor = self.monitor
@@ -310,7 +312,8 @@ class LocalizationStack:
         gated = self.tracker.gated_fingerprint()
         cmap = self.clutter_map  # its points' returns merge with a reflector's as another's do
         others = None if cmap is None else cmap.predicted_m(estimate.pose[:2])
-        if monitor.update(estimate, gated, others, ego.speed_mps) and monitor.cfg.drop_suspects:
+        changed = monitor.update(estimate, gated, others, ego.speed_mps, detections)
+        if changed and monitor.cfg.drop_suspects:
             key = monitor.suspects
             if key not in self._models:
                 self._models[key] = model_without(self.world, self.localizer.cfg, key)

@@ -9,9 +9,10 @@ import pytest
 import lrp_gym  # noqa: F401  (registers the envs)
 from agents.pure_pursuit import PurePursuitPolicy
 from lrp_gym.config import ReflectorMonitorConfig, load_scenario
-from lrp_gym.localization.monitor_frame import MonitorFrame
+from lrp_gym.localization.monitor_frame import MonitorFrame, masked_by_stronger
 from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.localization.reflector_monitor import ReflectorMonitor
+from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world import World
 
@@ -252,3 +253,34 @@ def test_nothing_is_named_in_the_surveyed_room():
         if not named:
             assert sum(env.localizer.model.counts) == len(env.world.layout)
     assert named_episodes <= 1
+
+
+def _detections(range_m, rcs_dbsm):
+    r = np.asarray(range_m, dtype=float)
+    zero = np.zeros(len(r))
+    return Detections(r, zero, zero, np.asarray(rcs_dbsm, dtype=float), zero)
+
+
+def test_only_a_much_stronger_return_near_its_distance_masks_a_reflector():
+    predicted = np.array([3.0, 4.0, 5.0, 6.0])
+    expected = np.zeros(4)  # 0 dBsm each
+    # 12 dB stronger 0.2 m away from reflector 0; 12 dB stronger but within the gate of 1 (its
+    # own return, or one answering for it); 5 dB stronger 0.2 m from 2; 12 dB, 0.5 m from 3.
+    det = _detections([3.2, 4.05, 5.2, 6.5], [12.0, 12.0, 5.0, 12.0])
+    masked = masked_by_stronger(predicted, expected, det, 0.105, 0.3, 10.0)
+    assert masked.tolist() == [True, False, False, False]
+
+
+def test_a_reflector_masked_by_a_strong_scatterer_is_not_named_for_its_misses(world):
+    # A strong scatterer 0.2 m beyond reflector 2's distance, and reflector 2 unseen in every
+    # frame: masked, the frames say nothing of it; without the masking rule it is named.
+    named = {}
+    for excess_db in (10.0, None):
+        mon = ReflectorMonitor(world, CFG.model_copy(update={"mask_excess_db": excess_db}), 20.0)
+        xy = _visible_xy(world, mon, np.random.default_rng(3), min_gap_m=0.55)
+        d = world.layout.distances_m(world.radar_position(xy))
+        det = _detections([*d, d[2] + 0.2], [0.0] * len(d) + [30.0])
+        for _ in range(60):
+            mon.update(_estimate(xy), _gated(world, xy, drop=[2]), detections=det)
+        named[excess_db] = mon.suspects
+    assert named[10.0] == () and named[None] == (2,)
