@@ -1,13 +1,20 @@
 """Replay the reflector monitor with other settings on the same recorded frames.
 
 Runs EPISODES patrol episodes of one robustness cell (pure pursuit, detections fidelity,
-seeds 0..EPISODES-1, the monitor's ``drop_suspects`` off so that its verdicts do not change the
-trajectory), records what the monitor saw on every frame (estimate, gated distances, clutter
-map points), then replays a fresh monitor per variant on those frames. Prints, per variant,
-the episodes naming the moved reflector within 40 frames and the episodes naming another one.
+seeds FIRST_SEED..FIRST_SEED+EPISODES-1, FIRST_SEED 0 unless given, the monitor's
+``drop_suspects`` off so that its verdicts do not change the trajectory), records what the
+monitor saw on every frame (estimate, gated distances, clutter map points, wheel speed, the
+frame's detections), then replays a fresh monitor per variant on those frames. Prints, per
+variant, the episodes naming the moved reflector within 40 frames and the episodes naming
+another one.
 
     python docs/scripts/monitor_replay.py ipin2023-patrol displaced_reflector 0.25 20
     python docs/scripts/monitor_replay.py ipin2023-2types-patrol clutter 0.5 20
+    python docs/scripts/monitor_replay.py ipin2023-patrol displaced_reflector 0.25 50 100
+
+The settings of session 11 (the Doppler weight, the masking option) were chosen on seeds 100
+and up. The 50-episode matrix runs seeds 0-49: until its monitor names a reflector, its
+trajectories are those recorded here, so a replay of those seeds gives the matrix's first name.
 """
 
 from __future__ import annotations
@@ -33,6 +40,7 @@ VARIANTS = {
     "misses + likelihood test, unconfirmed": {"displacement_confirm_chi2": None},
     "misses + likelihood test, distances only (session 10)": {"displacement_doppler_std_mps": 0.0},
     "misses + likelihood test (default)": {},
+    "misses + likelihood test, masking at 10 dB": {"mask_excess_db": 10.0},
 }
 
 
@@ -96,8 +104,10 @@ def replay(episode: dict, changes: dict) -> dict[int, int]:
     return named
 
 
-def main(scenario: str, perturbation: str, severity: float, episodes: int) -> None:
-    recorded = record(scenario, perturbation, severity, episodes)
+def main(
+    scenario: str, perturbation: str, severity: float, episodes: int, first_seed: int = 0
+) -> None:
+    recorded = record(scenario, perturbation, severity, episodes, first_seed)
     print(f"{scenario}, {perturbation} {severity:g}, {episodes} episodes")
     for name, changes in VARIANTS.items():
         right = wrong = 0
@@ -109,4 +119,5 @@ def main(scenario: str, perturbation: str, severity: float, episodes: int) -> No
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2], float(sys.argv[3]), int(sys.argv[4]))
+    first = int(sys.argv[5]) if len(sys.argv) > 5 else 0
+    main(sys.argv[1], sys.argv[2], float(sys.argv[3]), int(sys.argv[4]), first)

@@ -127,11 +127,13 @@ class ReflectorMonitorConfig(Strict):
         "must be as tight as the radar allows",
     )
     mask_excess_db: float | None = Field(
-        default=10.0,
-        description="a frame does not judge a reflector when a detection this many dB stronger "
-        "than the reflector's expected RCS lies within mask_window_m of its distance (outside "
-        "the gate): such a return can hide it (CFAR, peak search), and a masked reflector "
-        "looks missing or moved; None: off",
+        default=None,
+        description="if set (10 was measured), a frame does not judge a reflector when a "
+        "detection this many dB stronger than the reflector's expected RCS lies within "
+        "mask_window_m of its distance (outside the gate): such a return can hide it (CFAR, "
+        "peak search), and a masked reflector looks missing or moved. Under strong clutter "
+        "it halves the false names of small reflectors but costs some naming of moved or "
+        "removed ones (docs/robustness.md); None (default): off",
     )
     mask_window_m: PositiveFloat = Field(
         default=0.3,
