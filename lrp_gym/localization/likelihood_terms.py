@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.special import ndtr
 
 from lrp_gym.localization._map_kernel import map_return_density
 
@@ -23,21 +24,41 @@ if TYPE_CHECKING:
 MOVING_CLUTTER_SHARE = 0.1
 
 
-def clutter_velocity_density(speed_mps: float, doppler_std_mps: float, uniform: float) -> float:
-    """Density of a clutter return's radial velocity (1 / (m/s)).
+def clutter_velocity_density(
+    speed_mps: float,
+    doppler_std_mps: float,
+    uniform: float,
+    v: np.ndarray | float | None = None,
+) -> np.ndarray | float:
+    """Density of a clutter return's radial velocity ``v`` (1 / (m/s)).
 
-    Clutter is mostly static (furniture, room corners, a pillar): its radial velocity is the
-    robot's own speed projected on the line of sight, within ``+-|speed_mps|`` (widened by twice
-    the velocity noise). Only :data:`MOVING_CLUTTER_SHARE` of it spreads over the radar's whole
+    Clutter is mostly static (furniture, room corners, a pillar): its true radial velocity is
+    the robot's own speed projected on the line of sight, spread over ``+-|speed_mps|``
+    (uniform: the azimuths and heights of unmapped scatterers are unknown), and it is measured
+    with the same velocity noise ``doppler_std_mps`` as a mapped return. The static part is
+    that box convolved with the noise, ``(Phi((v + s) / sigma) - Phi((v - s) / sigma)) / (2 s)``,
+    so a return whose velocity any pose could predict is as likely as clutter as it is as a
+    chance match: the Doppler term then adds evidence only where the predicted velocity is
+    closer than chance. Only :data:`MOVING_CLUTTER_SHARE` of it spreads over the radar's whole
     unambiguous interval (density ``uniform``). Spreading all of it there would make clutter
-    about 20 times less likely per return than any pose's match at walking speed, where every
-    radial velocity is within a few tenths of a m/s of zero: the filter then prefers whichever
-    pose calls the fewest returns clutter, a wrong one among unmapped scatterers
-    (docs/robustness.md).
+    about 20 times less likely per return than any pose's match at walking speed (session 8);
+    a box of half width ``|s| + 2 sigma`` (session 8 to 10) was still half as dense as static
+    clutter near zero velocity at the pursuit's creeping 0.3 m/s, so every chance match of an
+    unmapped scatterer counted for the pose that made it (docs/robustness.md).
+
+    Without ``v`` the density at ``v = 0`` (its largest value) is returned.
     """
-    half_width = min(abs(speed_mps) + 2.0 * doppler_std_mps, 0.5 / uniform)
-    static = 0.5 / max(half_width, 1e-6)
-    return (1.0 - MOVING_CLUTTER_SHARE) * static + MOVING_CLUTTER_SHARE * uniform
+    s = min(abs(float(speed_mps)), 0.5 / uniform)  # no faster than the unambiguous interval
+    sigma = max(float(doppler_std_mps), 1e-6)
+    x = np.zeros(1) if v is None else np.asarray(v, dtype=float)
+    if s < 1e-6 * sigma:
+        static = np.exp(-0.5 * (x / sigma) ** 2) / (np.sqrt(2.0 * np.pi) * sigma)
+    else:
+        static = (ndtr((x + s) / sigma) - ndtr((x - s) / sigma)) / (2.0 * s)
+    out = (1.0 - MOVING_CLUTTER_SHARE) * static + MOVING_CLUTTER_SHARE * uniform
+    if v is None:
+        return float(out[0])
+    return out if np.ndim(v) else float(out)
 
 
 def doppler_density(
@@ -169,9 +190,10 @@ def _segment_term(frame: _Frame, seg: Segment) -> np.ndarray:
             model.doppler_coefficients(),
             model.use_numba,
         )
-    log_mix = _log_mixture(
-        g, log_norm, c, model.clutter_density_for(dens_v is not None, frame.speed_mps), dtype
+    clutter = model.clutter_density_for(
+        dens_v is not None, frame.speed_mps, seg.v if dens_v is not None else None
     )
+    log_mix = _log_mixture(g, log_norm, c, clutter, dtype)
     if log_sorted is None:
         return log_mix
     # All n distances are reflectors with probability (1 - c)^n: sorted assignment;
@@ -215,11 +237,15 @@ def _missed_term(frame: _Frame, segments: list[Segment]) -> np.ndarray:
     return out
 
 
-def _log_mixture(g: np.ndarray, log_norm: np.ndarray, c: float, clutter_density: float, dtype):
-    """``sum_i log((1 - c) N_i g_i + c / R)`` (N,) over the distances' mixture densities
-    ``g`` (n, N) (normalisation ``N_i = exp(log_norm_i)``)."""
+def _log_mixture(
+    g: np.ndarray, log_norm: np.ndarray, c: float, clutter_density: float | np.ndarray, dtype
+):
+    """``sum_i log((1 - c) N_i g_i + c rho_i)`` (N,) over the distances' mixture densities
+    ``g`` (n, N) (normalisation ``N_i = exp(log_norm_i)``), ``rho`` the clutter density, one
+    for all distances or one per distance (n,) (its velocity's)."""
     g *= ((1.0 - c) * np.exp(log_norm)).astype(dtype)[:, None]
-    g += dtype(c * clutter_density)
+    rho = np.asarray(clutter_density, dtype=float)
+    g += (c * rho).astype(dtype)[:, None] if rho.ndim else dtype(c * rho)
     # Every factor is >= the clutter floor: chunks of 8 cannot underflow in float32.
     log_mix = np.zeros(g.shape[1])
     for k in range(0, g.shape[0], 8):

@@ -314,10 +314,13 @@ def test_a_kidnap_is_noticed_within_two_frames_under_the_heavy_outlier_class():
     # The weights' clutter probability 0.5 shrinks a lost cloud's deficit per frame to about
     # the lost test's drift: weighed with it, the test let these patrols (seeds where it was
     # slowest, of 30) stay converged on the old pose for up to 6 frames. Its own 0.2 does not.
+    # (Since session 11's static-clutter velocity density the heavy class costs at most 3
+    # frames on seeds 0-29, 20 in all against 5 with the test's own class; seed 12 is its
+    # slowest.)
     wrong = [_wrong_frames_after_kidnap(s, {}) for s in (4, 13, 14, 27)]
     assert max(wrong) <= 2
     heavy = {"localization": {"lost_test_clutter_probability": None}}
-    assert _wrong_frames_after_kidnap(27, heavy) > 2
+    assert _wrong_frames_after_kidnap(12, heavy) > 2
 
 
 def test_the_lost_test_follows_the_map_without_suspects(room):
