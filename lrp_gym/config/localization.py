@@ -98,7 +98,7 @@ class ReflectorMonitorConfig(Strict):
         "other radial velocities); 0 weighs the distances only",
     )
     displacement_confirm_chi2: PositiveFloat | None = Field(
-        default=6.0,
+        default=8.0,
         description="likelihood test: name a reflector only if the parity test (which "
         "projects the estimate's position error out) gives it at least this too: with wheel "
         "slip the estimate lags by 5-10 cm, which the likelihood test alone takes for a "

@@ -155,17 +155,21 @@ class DisplacementGlrt:
             # A static point's radial velocity is -v . u (u: unit vector from the radar).
             expected = -bearing[idx] @ np.asarray(velocity_xy, dtype=float)
             measured = np.asarray(velocities_mps, dtype=float)[cols]
-            weight = self._doppler_ratio(measured[None, :] - expected[:, None], velocity_xy)
+            weight = self._doppler_ratio(measured, expected, velocity_xy)
         shift = bearing[idx] @ self.offsets_m.T  # (J, G): u . d
         self.log_lr[idx] += self._terms(diff, shift, weight)
 
-    def _doppler_ratio(self, dv: np.ndarray, velocity_xy: np.ndarray) -> np.ndarray:
-        """Density of velocity residuals ``dv`` (J, Z) under a reflector's own return over
-        that of a static scatterer's radial velocity at this speed."""
+    def _doppler_ratio(
+        self, measured: np.ndarray, expected: np.ndarray, velocity_xy: np.ndarray
+    ) -> np.ndarray:
+        """(J, Z): density of each measured radial velocity ``measured`` (Z,) as the return of
+        a reflector expected at ``expected`` (J,) over its density as a static scatterer's at
+        this speed (the localiser's clutter model)."""
         s, q = self.doppler_std_mps, self.doppler_outlier_probability
+        dv = measured[None, :] - expected[:, None]
         own = (1.0 - q) * np.exp(-0.5 * (dv / s) ** 2) / (_SQRT_2PI * s) + q * self.velocity_uniform
         speed = float(np.hypot(*velocity_xy))
-        return own / clutter_velocity_density(speed, s, self.velocity_uniform)
+        return own / clutter_velocity_density(speed, s, self.velocity_uniform, measured)[None, :]
 
     def _terms(
         self, diff: np.ndarray, shift: np.ndarray, weight: np.ndarray | None = None
