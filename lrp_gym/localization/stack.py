@@ -282,8 +282,7 @@ class LocalizationStack:
 
         With :class:`Detections` (e.g. another stack's radar frame, or a radar frame measured
         before the odometry was drawn): tracker and localiser in the configured order. With a
-        :class:`Fingerprint` (e.g. exact distances): the localiser weighs it directly, the
-        tracker is bypassed.
+        :class:`Fingerprint` (e.g. exact distances): the localiser weighs it directly.
         """
         t0 = time.perf_counter()
         if isinstance(frame, Fingerprint):
@@ -304,8 +303,7 @@ class LocalizationStack:
     def _check_reflectors(
         self, estimate: PoseEstimate, ego: EgoMotion, detections: Detections
     ) -> tuple[int, ...]:
-        """Feed the reflector monitor this frame's gated detections; when its suspects change
-        (and ``drop_suspects``), the localiser gets the map without them."""
+        """The reflector monitor on this frame; new suspects leave the localiser's map."""
         monitor = self.monitor
         if monitor is None:
             return ()
