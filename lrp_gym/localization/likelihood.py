@@ -32,13 +32,13 @@ particles' velocity vectors), each reflector or structure term is multiplied by 
 the measured radial velocity ``v_i`` given the one the particle predicts for that return,
 ``(1 - q) N(v_i; u_j, s_v^2) + q / (2 v_max)`` (``q`` the Doppler outlier probability), and
 the clutter term by the density of a mostly static scatterer's radial velocity (the robot's
-speed on an unknown line of sight, uniform over ``+-|v|``, blurred by the same ``s_v``). A static reflector at horizontal offset ``p_j - x`` and range ``e_j`` closes at
-``u_j = -v . (p_j - x) / e_j``: the heading enters through the velocity ``v``. With a
+speed on an unknown line of sight, uniform over ``+-|v|``, blurred by the same ``s_v``). A
+static reflector at horizontal offset ``p_j - x`` and range ``e_j`` closes at ``u_j = -v .
+(p_j - x) / e_j``: the heading enters through the velocity ``v``. With a
 ``detection_probability`` ``P_D``, each mapped reflector adds ``log(P_D k_j + 1 - P_D)``,
 ``k_j`` its best match's kernel among the distances of any type (negative information).
 Invariant to the order of the distances; the array code is in
-:mod:`~lrp_gym.localization.likelihood_terms`, the map's returns in
-:mod:`~lrp_gym.localization.map_returns`.
+:mod:`~lrp_gym.localization.likelihood_terms`, the map's returns in :mod:`map_returns`.
 """
 
 from __future__ import annotations
@@ -193,8 +193,7 @@ class FingerprintModel:
         self, doppler: bool, speed_mps: float = 0.0, velocities_mps: np.ndarray | None = None
     ) -> float | np.ndarray:
         """Density of a clutter return: uniform in range and, with Doppler, times the density
-        of its radial velocity (mostly static clutter:
-        :func:`~lrp_gym.localization.likelihood_terms.clutter_velocity_density`), one per
+        of its radial velocity (``likelihood_terms.clutter_velocity_density``), one per
         measured velocity in ``velocities_mps`` (n,), else its value at zero velocity."""
         if not doppler:
             return self.clutter_density
