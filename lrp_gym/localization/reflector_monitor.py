@@ -16,9 +16,12 @@ still answers inside or near the gate in many frames: the displacement test name
 a fixed move explains its returns over the frames significantly better than none, and better
 than any other reflector's move explains theirs. By default
 (:mod:`lrp_gym.localization.displacement_glrt`) every return near the reflector's distance is
-a candidate for its own, because the nearest one is often the room's; the parity test of
-:mod:`lrp_gym.localization.displacement_test` fits the nearest returns, with the estimate's
-position error projected out. The null case is the radar's own miss rate (about 5 %
+a candidate for its own, because the nearest one is often the room's, weighed by how well its
+radial velocity fits the reflector's line of sight; the parity test of
+:mod:`lrp_gym.localization.displacement_test`, which confirms a name, fits the nearest return
+whose radial velocity fits, with the estimate's position error projected out. With
+``mask_excess_db`` set (off by default), a frame does not judge a reflector that a much
+stronger return near its distance may hide. The null case is the radar's own miss rate (about 5 %
 per frame for a visible trihedral in the paper room). The gate must be tight: a frame has about ten
 reflector-like returns (ghosts via walls and ceiling, room corners) between 2 and 6 m, so a
 moved reflector's predicted distance still finds some return within 0.1 m in about half of
