@@ -126,7 +126,7 @@ class ReflectorMonitorConfig(Strict):
         "measurement_std_m): ghosts and room returns crowd the reflector band, so the gate "
         "must be as tight as the radar allows",
     )
-    mask_excess_db: float | None = Field(
+    mask_excess_db: NonNegFloat | None = Field(
         default=None,
         description="if set (10 was measured), a frame does not judge a reflector when a "
         "detection this many dB stronger than the reflector's expected RCS lies within "
