@@ -38,7 +38,7 @@ static reflector at horizontal offset ``p_j - x`` and range ``e_j`` closes at ``
 ``detection_probability`` ``P_D``, each mapped reflector adds ``log(P_D k_j + 1 - P_D)``,
 ``k_j`` its best match's kernel among the distances of any type (negative information).
 Invariant to the order of the distances; the array code is in
-:mod:`~lrp_gym.localization.likelihood_terms`, the map's returns in :mod:`map_returns`.
+:mod:`~lrp_gym.localization.likelihood_terms`, the map's in :mod:`~lrp_gym.localization.map_returns`.
 """
 
 from __future__ import annotations
