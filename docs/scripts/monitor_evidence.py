@@ -45,7 +45,7 @@ def velocities(recorded: list[dict]) -> None:
         for f, _, _ in _frames(ep):
             if f.velocities_mps is None:
                 continue
-            expected = -f.bearing @ f.velocity_xy
+            expected = f.expected_velocity_mps
             for j in np.flatnonzero(f.judged):
                 if j in ep["moved"]:
                     continue

@@ -36,7 +36,7 @@ def noncentrality(ep: dict) -> float:
     shift = ep["offsets_m"][0, :2]
     test = DisplacementTest(len(ep["world"].layout), 0.03, np.inf, 30)
     for pose in ep["true_poses"][:SUSPECT_BUDGET_FRAMES]:
-        _, seen, bearing = monitor._geometry(np.asarray(pose[:2], dtype=float))
+        _, seen, bearing, _ = monitor._geometry(np.asarray(pose[:2], dtype=float))
         residual = np.zeros(len(seen))
         residual[j] = bearing[j] @ shift
         test.add(seen, residual, bearing)

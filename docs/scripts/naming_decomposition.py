@@ -54,7 +54,7 @@ def decompose(ep: dict, rng: np.random.Generator) -> dict[str, list[float]]:
     for k, ((est, gated, others, speed, det), pose) in enumerate(frames, start=1):
         radar = world.radar_position(np.asarray(pose[:2], float))
         own = np.linalg.norm(true_pos - radar, axis=1) + rng.normal(0.0, 0.026, len(true_pos))
-        predicted, seen, bearing = mons["ideal"]._geometry(pose[:2])
+        predicted, seen, bearing, _ = mons["ideal"]._geometry(pose[:2])
         mons["ideal"].accumulate(_frame(predicted, seen, bearing, own[seen]))
         real = mons["real"].observe(
             SimpleNamespace(converged=est.converged, pose=est.pose), gated, others, speed, det

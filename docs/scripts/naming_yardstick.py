@@ -39,7 +39,7 @@ def ideal_named(ep: dict, rng: np.random.Generator) -> tuple[bool, bool]:
     ]
     named = [False, False]
     for pose in ep["true_poses"][:SUSPECT_BUDGET_FRAMES]:
-        predicted, seen, bearing = monitors[0]._geometry(pose[:2])
+        predicted, seen, bearing, _ = monitors[0]._geometry(pose[:2])
         radar = world.radar_position(np.asarray(pose[:2], float))
         measured = np.linalg.norm(true_pos - radar, axis=1) + rng.normal(0, 0.026, len(seen))
         z = np.sort(measured[seen])  # only the reflectors in view answer

@@ -43,7 +43,10 @@ from __future__ import annotations
 import numpy as np
 
 from lrp_gym.localization.displacement_test import leading_reflector
-from lrp_gym.localization.likelihood_terms import clutter_velocity_density
+from lrp_gym.localization.likelihood_terms import (
+    clutter_velocity_density,
+    velocity_density_coefficients,
+)
 
 _SQRT_2PI = float(np.sqrt(2.0 * np.pi))
 
@@ -135,13 +138,16 @@ class DisplacementGlrt:
         bearing: np.ndarray,
         velocities_mps: np.ndarray | None = None,
         velocity_xy: np.ndarray | None = None,
+        expected_velocity_mps: np.ndarray | None = None,
     ) -> None:
         """Add one frame: ``judged`` (M,) bool, ``predicted_m`` (M,) the reflectors'
         distances from the estimate, ``distances_m`` (Z,) every reflector-like distance of
         the frame (all types), ``bearing`` (M, 2) the horizontal unit vectors from the radar
         to the reflectors (d distance / d reflector xy). With ``velocities_mps`` (Z,), the
         distances' radial velocities, and ``velocity_xy`` (2,), the robot's estimated
-        velocity over the floor, the Doppler weighs the candidates too."""
+        velocity over the floor, the Doppler weighs the candidates too;
+        ``expected_velocity_mps`` (M,), the reflectors' predicted radial velocities, if the
+        caller has them (else ``-bearing @ velocity_xy``)."""
         idx = np.flatnonzero(judged)
         if len(idx) < 3:  # the others do not vouch for the pose
             return
@@ -153,7 +159,9 @@ class DisplacementGlrt:
         weight = None
         if self.doppler_std_mps > 0.0 and velocities_mps is not None and velocity_xy is not None:
             # A static point's radial velocity is -v . u (u: unit vector from the radar).
-            expected = -bearing[idx] @ np.asarray(velocity_xy, dtype=float)
+            if expected_velocity_mps is None:
+                expected_velocity_mps = -bearing @ np.asarray(velocity_xy, dtype=float)
+            expected = np.asarray(expected_velocity_mps, dtype=float)[idx]
             measured = np.asarray(velocities_mps, dtype=float)[cols]
             weight = self._doppler_ratio(measured, expected, velocity_xy)
         shift = bearing[idx] @ self.offsets_m.T  # (J, G): u . d
@@ -165,11 +173,12 @@ class DisplacementGlrt:
         """(J, Z): density of each measured radial velocity ``measured`` (Z,) as the return of
         a reflector expected at ``expected`` (J,) over its density as a static scatterer's at
         this speed (the localiser's clutter model)."""
-        s, q = self.doppler_std_mps, self.doppler_outlier_probability
+        s, u = self.doppler_std_mps, self.velocity_uniform
+        a, b, c = velocity_density_coefficients(s, self.doppler_outlier_probability, u)
         dv = measured[None, :] - expected[:, None]
-        own = (1.0 - q) * np.exp(-0.5 * (dv / s) ** 2) / (_SQRT_2PI * s) + q * self.velocity_uniform
+        own = a * np.exp(c * dv * dv) + b
         speed = float(np.hypot(*velocity_xy))
-        return own / clutter_velocity_density(speed, s, self.velocity_uniform, measured)[None, :]
+        return own / clutter_velocity_density(speed, s, u, measured)[None, :]
 
     def _terms(
         self, diff: np.ndarray, shift: np.ndarray, weight: np.ndarray | None = None

@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from lrp_gym.localization.likelihood_terms import clutter_velocity_density, log_likelihood_terms
+from lrp_gym.localization import likelihood_terms as terms
 from lrp_gym.localization.map_returns import MapReturns
 from lrp_gym.localization.sorting import sort_rows_inplace, sort_rows_paired_inplace
 from lrp_gym.tracking.fingerprint import Fingerprint
@@ -197,18 +197,15 @@ class FingerprintModel:
         measured velocity in ``velocities_mps`` (n,), else its value at zero velocity."""
         if not doppler:
             return self.clutter_density
-        return self.clutter_density * clutter_velocity_density(
+        return self.clutter_density * terms.clutter_velocity_density(
             speed_mps, self.doppler_std_mps, self.velocity_density, velocities_mps
         )
 
     def doppler_coefficients(self) -> tuple[float, float, float]:
-        """(a, b, c) of the Doppler density ``a exp(c dv^2) + b``: the Gaussian of the measured
-        radial velocity about the predicted one, plus the uniform outlier density."""
-        s = self.doppler_std_mps
-        q = self.doppler_outlier_probability
-        if s <= 0.0:
-            return 1.0, 0.0, 0.0
-        return (1.0 - q) / (np.sqrt(2.0 * np.pi) * s), q * self.velocity_density, -0.5 / s**2
+        """(a, b, c) of the Doppler density (``velocity_density_coefficients``)."""
+        return terms.velocity_density_coefficients(
+            self.doppler_std_mps, self.doppler_outlier_probability, self.velocity_density
+        )
 
     def expected(self, xy: np.ndarray, dtype=np.float64) -> list[np.ndarray]:
         """Sorted expected distances per type for positions (N, 2): list of (m_t, N) arrays.
@@ -344,7 +341,7 @@ class FingerprintModel:
         if map_ranges is not None and (vel is None or map_rates is not None):
             given = (map_ranges, None if vel is None else map_rates)
         expected = expected if vel is None else None
-        return log_likelihood_terms(self, xy, segments, vel, given, dtype, expected)
+        return terms.log_likelihood_terms(self, xy, segments, vel, given, dtype, expected)
 
     def distance_fits(
         self, xy: np.ndarray, weights: np.ndarray, fingerprint: Fingerprint

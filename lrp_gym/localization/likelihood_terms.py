@@ -61,11 +61,25 @@ def clutter_velocity_density(
     return out if np.ndim(v) else float(out)
 
 
+def velocity_density_coefficients(
+    std_mps: float, outlier_probability: float, uniform: float
+) -> tuple[float, float, float]:
+    """(a, b, c) of the density ``a exp(c dv^2) + b`` of a return's measured radial velocity
+    ``dv`` off the one predicted: a Gaussian of ``std_mps``, plus the share
+    ``outlier_probability`` spread uniformly (density ``uniform``, 1/(m/s)) over the radar's
+    velocity span. ``std_mps`` 0: no Doppler term (density 1)."""
+    if std_mps <= 0.0:
+        return 1.0, 0.0, 0.0
+    q = outlier_probability
+    return (1.0 - q) / (np.sqrt(2.0 * np.pi) * std_mps), q * uniform, -0.5 / std_mps**2
+
+
 def doppler_density(
     v: np.ndarray, expected_v: np.ndarray, coefficients: tuple[float, float, float], dtype
 ) -> np.ndarray:
     """Density ``a exp(c dv^2) + b`` (n, k, N) of measured velocities ``v`` (n,) given
-    expected ones (k, N), with ``coefficients = (a, b, c)``."""
+    expected ones (k, N), with ``coefficients = (a, b, c)``
+    (:func:`velocity_density_coefficients`)."""
     a, b, c = coefficients
     dv = expected_v[None, :, :] - v.astype(dtype)[:, None, None]
     dv *= dv

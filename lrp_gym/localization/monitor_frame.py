@@ -33,6 +33,9 @@ class MonitorFrame:
     velocity_xy : ndarray (2,), optional
         The robot's velocity over the floor: wheel speed along the estimated heading (None:
         no speed given).
+    expected_velocity_mps : ndarray (M,), optional
+        Each reflector's radial velocity predicted from the estimate and ``velocity_xy``
+        (a static point's: ``-bearing @ velocity_xy``).
     parity_residual_m : ndarray (M,), optional
         The residuals the parity test takes: of the nearest return whose radial velocity fits
         the reflector's (the nearest one if none does); None: ``residual_m``.
@@ -45,6 +48,7 @@ class MonitorFrame:
     distances_m: np.ndarray = field(default_factory=lambda: np.zeros(0))
     velocities_mps: np.ndarray | None = None
     velocity_xy: np.ndarray | None = None
+    expected_velocity_mps: np.ndarray | None = None
     parity_residual_m: np.ndarray | None = None
 
 

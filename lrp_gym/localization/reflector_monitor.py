@@ -155,9 +155,10 @@ class ReflectorMonitor:
         should see there (in range, facing it within ``min_gain``, no obstacle between)."""
         return self._geometry(xy)[:2]
 
-    def _geometry(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`_expected`, and the horizontal part (M, 2) of each unit vector from the
-        radar to the reflector: how a reflector's distance changes as it moves."""
+    def _geometry(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`_expected`, the horizontal part (M, 2) of each unit vector from the radar
+        to the reflector (how a reflector's distance changes as it moves) and each one's RCS
+        at this aspect (M,), m^2."""
         layout, room = self.world.layout, self.world.room
         radar = self.world.radar_position(np.asarray(xy, dtype=float))
         dist = layout.distances_m(radar)
@@ -167,7 +168,7 @@ class ReflectorMonitor:
         if room.obstacles:
             starts = np.broadcast_to(radar, layout.positions_m.shape)
             ok &= ~room.segments_blocked(starts, layout.positions_m)
-        return dist, ok, bearing
+        return dist, ok, bearing, rcs_m2
 
     def update(
         self,
@@ -199,7 +200,7 @@ class ReflectorMonitor:
         frame judges no reflector (or is not converged)."""
         if not estimate.converged:
             return None
-        predicted, seen, bearing = self._geometry(estimate.pose[:2])
+        predicted, seen, bearing, rcs_m2 = self._geometry(estimate.pose[:2])
         if not seen.any():
             return None
         # A reflector whose distance is within two range cells of another one's shares its
@@ -212,8 +213,7 @@ class ReflectorMonitor:
         cfg = self.cfg
         if detections is not None and cfg.mask_excess_db is not None:
             # Nor does a frame in which a much stronger return may hide the reflector.
-            radar = self.world.radar_position(np.asarray(estimate.pose[:2], dtype=float))
-            rcs_dbsm = 10.0 * np.log10(np.maximum(self.world.layout.effective_rcs_m2(radar), 1e-12))
+            rcs_dbsm = 10.0 * np.log10(np.maximum(rcs_m2, 1e-12))
             gate_m = cfg.gate_sigmas * cfg.range_std_m
             seen &= ~masked_by_stronger(
                 predicted, rcs_dbsm, detections, gate_m, cfg.mask_window_m, cfg.mask_excess_db
@@ -221,17 +221,20 @@ class ReflectorMonitor:
         if not seen.any():
             return None
         z = np.concatenate([np.zeros(0), *gated.distances_m])
-        vel = velocity_xy = None
+        vel = velocity_xy = expected_v = None
         if gated.velocities_mps is not None and speed_mps is not None:
             vel = np.concatenate([np.zeros(0), *gated.velocities_mps])
             heading = float(estimate.pose[2])
             velocity_xy = float(speed_mps) * np.array([np.cos(heading), np.sin(heading)])
+            expected_v = -bearing @ velocity_xy  # a static point's radial velocity
         residual = nearest_residuals(predicted, z)
         parity = None
         v_std = self.cfg.displacement_doppler_std_mps
         if vel is not None and v_std > 0 and len(z):
-            parity = doppler_residuals(predicted, z, vel, -bearing @ velocity_xy, 3.0 * v_std)
-        return MonitorFrame(seen, residual, bearing, predicted, z, vel, velocity_xy, parity)
+            parity = doppler_residuals(predicted, z, vel, expected_v, 3.0 * v_std)
+        return MonitorFrame(
+            seen, residual, bearing, predicted, z, vel, velocity_xy, expected_v, parity
+        )
 
     def accumulate(self, frame: MonitorFrame) -> bool:
         """Add one frame's evidence (what :meth:`observe` returns); returns whether the
@@ -297,6 +300,7 @@ class ReflectorMonitor:
                 frame.bearing,
                 frame.velocities_mps,
                 frame.velocity_xy,
+                frame.expected_velocity_mps,
             )
 
     def _biased(self) -> np.ndarray:
