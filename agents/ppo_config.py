@@ -7,7 +7,7 @@ configs/ppo.yaml`` reads it unchanged. Settings the zoo takes on its command lin
 under the top-level key ``lrp-gym`` (the zoo reads only the section of the env it trains)::
 
     lrp-gym:
-      LRPRadarNavFast-v0: {vec_env: subproc, eval_freq: 20000, n_eval_episodes: 10,
+      LRPRadarNavFast-v0: {vec_env: batch, eval_freq: 20000, n_eval_episodes: 10,
                            checkpoint_freq: 10000, eval_env_id: LRPRadarNavFast-v0}
 
 (zoo equivalents: ``--vec-env``, ``--eval-freq``, ``--eval-episodes``, ``--save-freq``).

@@ -62,7 +62,7 @@ def test_config_errors(tmp_path):
 def test_committed_config_parses():
     env_id, raw = load_hyperparams("configs/ppo.yaml")
     hp = split_hyperparams(raw)
-    assert env_id == ENV and hp["vec_env"] == "subproc" and hp["eval_freq"] == 20000
+    assert env_id == ENV and hp["vec_env"] == "batch" and hp["eval_freq"] == 20000
     assert hp["ppo"]["batch_size"] <= hp["ppo"]["n_steps"] * hp["n_envs"]
     # rl_zoo3 passes every key of the env's section to PPO: no lrp-gym key may be there.
     sections = yaml.safe_load(open("configs/ppo.yaml"))
