@@ -77,6 +77,14 @@ PLACEMENT_SEEDS = range(5)
 ROBUST = (("shadowing", 0.25), ("missed_detections", 0.2))
 KIDNAP = (("kidnapping", 0.5), ("kidnapping", 1.0))
 
+#: How a training run's ``n_envs`` envs ran (``vec_env`` in its config).
+VEC_ENV_WORDS = {
+    "batch": "robots in one batched env",
+    "subproc": "subprocess envs",
+    "dummy": "envs in turn",
+    None: "envs",
+}
+
 ROWS: tuple[Row, ...] = (
     Row(
         "trust_1type",
@@ -222,8 +230,8 @@ ROWS: tuple[Row, ...] = (
         None,
         lambda r, _: (
             f"{r['wall_time_s'] / 60:.1f} min for {r['timesteps']:,} steps "
-            f"({r['hyperparams']['n_envs']} subprocess envs; from "
-            "agents/models/ppo_lrp_nav.json)"
+            f"({r['hyperparams']['n_envs']} {VEC_ENV_WORDS[r['hyperparams'].get('vec_env')]}; "
+            "from agents/models/ppo_lrp_nav.json)"
         ),
         lambda r, _: r["wall_time_s"] <= 30 * 60,
         typed="19.6 min for 300k steps (2 subprocess envs)",
