@@ -41,6 +41,12 @@ def _in_box(xy: np.ndarray, margin_m: float) -> np.ndarray:
     return np.all((xy >= lo) & (xy <= hi), axis=-1)
 
 
+def _box_distance_m(xy: np.ndarray) -> np.ndarray:
+    """Distance of floor points (N, 2) from the box's footprint (0 inside)."""
+    lo, hi = np.array(BOX["min"][:2]), np.array(BOX["max"][:2])
+    return np.hypot(*(xy - np.clip(xy, lo, hi)).T)
+
+
 def test_room_free_takes_floor_points_only(world):
     with pytest.raises(ValueError, match=r"\(\.\.\., 2\)"):
         world.room.free(np.zeros((4, 3)))
@@ -87,14 +93,17 @@ def test_env_steps_in_a_room_with_an_obstacle(cfg):
     import lrp_gym  # noqa: F401
 
     env = gym.make("LRPRadarNavFast-v0", scenario=cfg.with_overrides({"task": {"mode": "goal"}}))
-    obs, info = env.reset(seed=0)
-    for _ in range(5):
-        obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
-        assert env.observation_space.contains(obs) and np.isfinite(reward)
-        if terminated:
-            break
-    # The robot's disc never enters the obstacle (a collision stops it before).
-    assert not _in_box(info["true_pose"][None, :2], cfg.robot.radius_m - 1e-9).any()
+    env.action_space.seed(0)
+    for seed in range(3):
+        obs, info = env.reset(seed=seed)
+        for _ in range(5):
+            obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+            assert env.observation_space.contains(obs) and np.isfinite(reward)
+            # The robot's disc never enters the obstacle (a collision stops it before). The
+            # disc may pass a corner closer than its radius along each axis: the distance counts.
+            assert _box_distance_m(info["true_pose"][None, :2])[0] >= cfg.robot.radius_m - 1e-9
+            if terminated:
+                break
     env.close()
 
 
