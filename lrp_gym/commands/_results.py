@@ -224,8 +224,7 @@ ROWS: tuple[Row, ...] = (
     ),
     Row(
         "ppo_training",
-        "PPO training wall time (shipped model; not rerun by `lrp-gym report`: about 20 min "
-        "on 2 cores)",
+        "PPO training wall time (shipped model; not rerun by `lrp-gym report`)",
         "<= 30 min",
         None,
         lambda r, _: (
