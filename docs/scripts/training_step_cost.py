@@ -15,6 +15,7 @@ PYTHONPATH=$PWD .venv/bin/python docs/scripts/training_step_cost.py --steps 600
 
 Sources: ``uniform`` (the bench's), ``untrained`` (Gaussian, std 0.37 about 0, clipped),
 ``shipped`` (the shipped PPO model, sampling as in training: ``deterministic=False``).
+``--loc KEY=VALUE`` sets a ``localization`` setting (e.g. ``initial_particles=2000``).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ import time
 
 import gymnasium as gym
 import numpy as np
+import yaml
 
 import lrp_gym  # noqa: F401  (registers the ids)
 
@@ -42,9 +44,12 @@ def action_source(name: str, env: gym.Env, rng: np.random.Generator):
     return lambda obs: policy.predict(obs[None], deterministic=False)[0][0]
 
 
-def phase_costs(source: str, steps: int, seed: int = 0) -> tuple[dict, dict, list[int]]:
+def phase_costs(
+    source: str, steps: int, seed: int = 0, localization: dict | None = None
+) -> tuple[dict, dict, list[int]]:
     """Per phase: CPU seconds and particle counts of each step; and the episode lengths."""
-    env = gym.make("LRPRadarNavFast-v0")
+    overrides = {"localization": localization} if localization else None
+    env = gym.make("LRPRadarNavFast-v0", overrides=overrides)
     act = action_source(source, env, np.random.default_rng(seed))
     cpu = {p: [] for p in PHASES}
     particles = {p: [] for p in PHASES}
@@ -77,9 +82,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=600)
     parser.add_argument("--sources", default="uniform,untrained,shipped")
+    parser.add_argument("--loc", action="append", default=[], metavar="KEY=VALUE")
     args = parser.parse_args()
+    settings = {k: yaml.safe_load(v) for k, v in (item.split("=", 1) for item in args.loc)}
     for source in args.sources.split(","):
-        cpu, particles, lengths = phase_costs(source, args.steps)
+        cpu, particles, lengths = phase_costs(source, args.steps, localization=settings)
         total = sum(sum(v) for v in cpu.values())
         mean_len = np.mean(lengths) if lengths else float("nan")
         print(
