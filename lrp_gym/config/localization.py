@@ -289,6 +289,18 @@ class LocalizationConfig(Strict):
         "outlier class: a heavy one shrinks a lost cloud's deficit per frame below the "
         "test's drift (calibrated with 0.2), and a kidnap goes unnoticed for frames",
     )
+    lost_alternative_drift_nats: NonNegFloat | None = Field(
+        default=1.0,
+        description="drift per frame of the lost test's second statistic: a filter over the "
+        "grid's cells against the cloud (lrp_gym.localization.grid_alternative), which notices "
+        "a wrong cloud that the truth beats by a few nats in every frame; None: leave it out",
+    )
+    lost_alternative_drift_per_distance_nats: NonNegFloat = Field(
+        default=0.1,
+        description="the second statistic's drift per measured distance: a frame's drift is "
+        "max(lost_alternative_drift_nats, this x distances), because chance fits elsewhere "
+        "on the map grow with the distances weighed, as for the first statistic",
+    )
     lost_threshold_nats: PositiveFloat = 8.0
     lost_restart_nats: PositiveFloat = 20.0
     lost_test_every: Annotated[int, Field(ge=1)] = Field(

@@ -119,13 +119,7 @@ class Amcl:
         return lost_test_model(self.model, self.cfg.lost_test_clutter_probability)
 
     def _new_lost_test(self) -> LostTest:
-        c = self.cfg
-        return LostTest(
-            c.lost_drift_nats,
-            c.lost_threshold_nats,
-            c.lost_drift_per_distance_nats,
-            every_frames=c.lost_test_every,
-        )
+        return LostTest.from_config(self.cfg, self.grid if self.global_proposal else None)
 
     # ------------------------------------------------------------------ sampling
     def _free(self, xy: np.ndarray) -> np.ndarray:
@@ -204,6 +198,7 @@ class Amcl:
         cfg = self.cfg
         noise = self.motion_noise if self.slip is None else self.slip.noise()
         self.particles = sample_motion(self.particles, odometry, noise, rng)
+        self.lost.move(odometry[1])
         w = self.weights * self._free(self.particles[:, :2])
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
@@ -250,10 +245,11 @@ class Amcl:
             marginal = self._cloud_marginal(fingerprint, w, returns)
             quiet = self._converged and self.p_random == 0.0
             if self.lost.due(quiet, marginal, fingerprint.count):
-                self._grid_loglik = self.grid.log_likelihood(self.lost_model, fingerprint)
-                best = float(np.max(self._grid_loglik))
-                self.lost.update_marginal(best, marginal, fingerprint.count)
-                self._pending_global = self.lost.statistic_nats >= self.cfg.lost_restart_nats
+                grid = self._grid_loglik = self.grid.log_likelihood(self.lost_model, fingerprint)
+                best = float(np.max(grid))
+                xy = self.particles[:, :2]
+                self.lost.update_marginal(best, marginal, fingerprint.count, grid, xy, w)
+                self._pending_global = self.lost.evidence_nats >= self.cfg.lost_restart_nats
         if self._pending_global:
             return self._global_start(fingerprint, rng, speed_mps)
         if recovery:

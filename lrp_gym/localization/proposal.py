@@ -15,7 +15,10 @@ that grid twice:
   the predicted particle cloud is the per-frame evidence that the robot is somewhere the cloud
   is not. A CUSUM of it, less a drift for the grid's selection bias, accumulates that evidence
   over frames and resets while the cloud explains the data; its value gives the probability
-  that the cloud has lost the robot.
+  that the cloud has lost the robot. A second CUSUM weighs a filter over the same cells
+  against the cloud (:mod:`~lrp_gym.localization.grid_alternative`): it pays the selection
+  once, not in every frame, and so hears a wrong cloud that the truth beats by a few nats a
+  frame.
 """
 
 from __future__ import annotations
@@ -26,6 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lrp_gym.config import LocalizationConfig
+from lrp_gym.localization.grid_alternative import GridAlternative
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.tracking.fingerprint import Fingerprint
 
@@ -57,8 +62,11 @@ class MeasurementGrid:
         gx = (np.arange(nx) + 0.5) * (size_xy_m[0] / nx)
         gy = (np.arange(ny) + 0.5) * (size_xy_m[1] / ny)
         xy = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
+        ij = np.stack(np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij"), axis=-1)
         self.cell_xy_m = np.array([size_xy_m[0] / nx, size_xy_m[1] / ny])
-        self.centres_m = xy[free(xy)]
+        is_free = free(xy)
+        self.centres_m = xy[is_free]
+        self.cell_index = ij.reshape(-1, 2)[is_free]  # (column, row) of each free cell
         self._free = free
         self._map_model: FingerprintModel | None = None
         self._map_ranges: list[np.ndarray | None] = []
@@ -125,9 +133,15 @@ class LostTest:
     threshold_nats : float
         Statistic at which the cloud counts as lost (probability 1/2).
     statistic_nats : float
-        Current CUSUM value (>= 0).
+        Current CUSUM value (>= 0) of the best cell against the cloud.
     last_deficit_nats : float
         This frame's best-cell log-likelihood minus the cloud's marginal log-likelihood.
+    alternative : GridAlternative or None
+        A filter over the grid's cells ("the robot is elsewhere"): its predictive likelihood
+        against the cloud's marginal is a second CUSUM, ``alternative_nats``, with its own
+        drift ``max(alternative_drift_nats, alternative_drift_per_distance_nats x
+        distances)`` (:mod:`~lrp_gym.localization.grid_alternative`).
+        None: the first statistic alone.
     """
 
     drift_nats: float = 4.0
@@ -138,12 +152,46 @@ class LostTest:
     every_frames: int = 1
     frames_skipped: int = 0
     last_best_nats: float | None = None
+    alternative: GridAlternative | None = None
+    alternative_drift_nats: float = 1.0
+    alternative_drift_per_distance_nats: float = 0.0
+    alternative_nats: float = 0.0
 
     def reset(self) -> None:
         self.statistic_nats = 0.0
         self.last_deficit_nats = 0.0
         self.frames_skipped = 0
         self.last_best_nats = None
+        self.alternative_nats = 0.0
+        if self.alternative is not None:
+            self.alternative.reset()
+
+    @classmethod
+    def from_config(cls, cfg: LocalizationConfig, grid: MeasurementGrid | None) -> LostTest:
+        """The test of ``cfg``'s ``lost_*`` settings; the alternative on ``grid`` (None: none)."""
+        drift = cfg.lost_alternative_drift_nats
+        use_alternative = drift is not None and grid is not None
+        return cls(
+            cfg.lost_drift_nats,
+            cfg.lost_threshold_nats,
+            cfg.lost_drift_per_distance_nats,
+            every_frames=cfg.lost_test_every,
+            alternative=GridAlternative(grid.cell_index, grid.cell_xy_m)
+            if use_alternative
+            else None,
+            alternative_drift_nats=drift or 0.0,
+            alternative_drift_per_distance_nats=cfg.lost_alternative_drift_per_distance_nats,
+        )
+
+    def move(self, distance_m: float) -> None:
+        """The odometry's translation since the last frame (the alternative's prediction)."""
+        if self.alternative is not None:
+            self.alternative.move(distance_m)
+
+    @property
+    def evidence_nats(self) -> float:
+        """The larger of the two statistics: what :attr:`p_lost` and a restart read."""
+        return max(self.statistic_nats, self.alternative_nats)
 
     def drift_for(self, n_distances: int) -> float:
         """A frame's drift: ``max(drift_nats, drift_per_distance_nats * n_distances)``."""
@@ -158,7 +206,7 @@ class LostTest:
         could add evidence (a kidnap drops the marginal by many nats) always runs the test."""
         if (
             quiet
-            and self.statistic_nats == 0.0
+            and self.evidence_nats == 0.0
             and self.frames_skipped + 1 < self.every_frames
             and self.last_best_nats is not None
             and marginal is not None
@@ -192,19 +240,42 @@ class LostTest:
         fingerprint of ``n_distances`` measured distances."""
         self.update_marginal(best_loglik, self.marginal(cloud_loglik, weights), n_distances)
 
-    def update_marginal(self, best_loglik: float, marginal: float | None, n_distances: int) -> None:
-        """:meth:`update` from the cloud's :meth:`marginal` (None: no frame to add)."""
+    def update_marginal(
+        self,
+        best_loglik: float,
+        marginal: float | None,
+        n_distances: int,
+        cell_loglik: np.ndarray | None = None,
+        cloud_xy: np.ndarray | None = None,
+        cloud_weights: np.ndarray | None = None,
+    ) -> None:
+        """:meth:`update` from the cloud's :meth:`marginal` (None: no frame to add);
+        ``cell_loglik``, the frame's grid likelihood, feeds the :attr:`alternative`, whose
+        evidence counts the cells away from the cloud (positions ``cloud_xy`` (N, 2) with
+        ``cloud_weights`` (N,))."""
         self.last_best_nats = best_loglik
+        evidence = None
+        if self.alternative is not None and cell_loglik is not None:
+            outside = None
+            if cloud_xy is not None:
+                outside = self.alternative.far_from(cloud_xy, cloud_weights)
+            evidence = self.alternative.update(cell_loglik, outside)
         if marginal is None:
             return
         self.last_deficit_nats = best_loglik - marginal
         drift = self.drift_for(n_distances)
         self.statistic_nats = max(0.0, self.statistic_nats + self.last_deficit_nats - drift)
+        if evidence is not None and evidence > -np.inf:
+            drift = max(
+                self.alternative_drift_nats, self.alternative_drift_per_distance_nats * n_distances
+            )
+            gain = evidence - marginal - drift
+            self.alternative_nats = max(0.0, self.alternative_nats + gain)
 
     @property
     def p_lost(self) -> float:
         """Probability that the cloud has lost the robot, from the statistic (logistic)."""
-        return float(1.0 / (1.0 + np.exp(self.threshold_nats - self.statistic_nats)))
+        return float(1.0 / (1.0 + np.exp(self.threshold_nats - self.evidence_nats)))
 
 
 # One copy per model and clutter probability: the grids cache their work per model object.

@@ -1,0 +1,71 @@
+"""Confidently wrong under clutter, episode by episode (session 13).
+
+Pure pursuit on the env's default task (unknown start pose and heading, sampled goal,
+detections fidelity) with unmapped static scatterers (``perturbations.clutter``). Prints one
+line per episode (steps, converged steps, converged steps off by > 0.3 m, the longest run of
+them, how it ended) and a summary: the share of converged steps that are wrong, and the
+episodes stuck (10 or more such steps in a row), as ``lrp-gym robustness`` counts them.
+
+    PYTHONPATH=$PWD .venv/bin/python docs/scripts/default_task_clutter.py --seeds 7100-7299 \
+        [--severity 0.5] [--set localization.lost_alternative_drift_nats=null]
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import gymnasium as gym
+
+import lrp_gym  # noqa: F401  (registers the ids)
+from agents.pure_pursuit import PurePursuitPolicy
+from lrp_gym.commands._common import overrides
+
+WRONG_M = 0.3
+STUCK_FRAMES = 10
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("scenario", nargs="?", default="ipin2023")
+    ap.add_argument("--seeds", default="7100-7299", help="FIRST-LAST")
+    ap.add_argument("--severity", type=float, default=0.5, help="clutter severity")
+    ap.add_argument("--set", action="append", default=[], dest="sets", metavar="KEY=VALUE")
+    args = ap.parse_args()
+    first, last = (int(s) for s in args.seeds.split("-"))
+    over = overrides(args.scenario, args.sets)
+    over.setdefault("perturbations", {})["clutter"] = {"severity": args.severity}
+    env = gym.make("LRPRadarNavFast-v0", scenario=args.scenario, task_mode="goal", overrides=over)
+    policy = PurePursuitPolicy.from_env(env)
+    total_conv = total_wrong = stuck = 0
+    for seed in range(first, last + 1):
+        policy.reset()
+        obs, _ = env.reset(seed=seed)
+        steps = conv = wrong = run = longest = 0
+        done = False
+        while not done:
+            obs, _, terminated, truncated, info = env.step(policy.act(obs))
+            done = terminated or truncated
+            steps += 1
+            is_wrong = bool(info["converged"] and info["position_error_m"] > WRONG_M)
+            conv += bool(info["converged"])
+            wrong += is_wrong
+            run = run + 1 if is_wrong else 0
+            longest = max(longest, run)
+        total_conv, total_wrong = total_conv + conv, total_wrong + wrong
+        stuck += longest >= STUCK_FRAMES
+        end = "truncated" if truncated else "terminated"
+        print(
+            f"seed {seed}: {steps} steps, {conv} converged, {wrong} wrong, longest {longest}, "
+            f"{end} {info['position_error_m']:.2f} m off",
+            flush=True,
+        )
+    episodes = last - first + 1
+    print(
+        f"{episodes} episodes: {total_wrong} of {total_conv} converged steps wrong "
+        f"({100 * total_wrong / max(total_conv, 1):.1f} %), {stuck} stuck "
+        f"(>= {STUCK_FRAMES} wrong converged steps in a row)"
+    )
+
+
+if __name__ == "__main__":
+    main()
