@@ -98,6 +98,7 @@ def reproduce_paper(
     if random_rooms:
         if true_fingerprints or plot_path:
             raise InputError("--random-rooms: runs both fingerprint kinds and draws no --plot")
+        load_config(scenario, sets, fidelity)  # the rooms replace it, but bad input is an error
         rooms_over = deep_merge(parse_sets(sets, scenario), {"radar": {"noise": noise}})
         if particles is not None:
             rooms_over = deep_merge(rooms_over, _particles(particles, 200))

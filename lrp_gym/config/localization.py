@@ -214,7 +214,7 @@ class LocalizationConfig(Strict):
     kld_bin_m: PositiveFloat = 0.1
     kld_bin_deg: PositiveFloat = 10.0
     motion_noise: MotionNoiseConfig = MotionNoiseConfig()
-    measurement_std_m: PositiveFloat = 0.075
+    measurement_std_m: PositiveFloat = 0.03
     measurements: Literal["detections", "tracks"] = Field(
         default="detections",
         description="what AMCL weighs: every RCS-gated detection, or the tracked fingerprint",
@@ -288,6 +288,13 @@ class LocalizationConfig(Strict):
         "recovery grid) weighs with; None: clutter_probability. Lighter than the weights' "
         "outlier class: a heavy one shrinks a lost cloud's deficit per frame below the "
         "test's drift (calibrated with 0.2), and a kidnap goes unnoticed for frames",
+    )
+    lost_test_std_m: PositiveFloat | None = Field(
+        default=None,
+        description="range std of the model that the lost test (and the recovery grid) weighs "
+        "with; None: measurement_std_m with the lost grid's quantisation added (cell^2 / 12 "
+        "in variance, 2.9 cm for 10 cm cells). The test weighs cell centres up to half a cell "
+        "from the robot: with the weights' std alone a right cloud reads as lost",
     )
     lost_alternative_drift_nats: NonNegFloat | None = Field(
         default=1.0,

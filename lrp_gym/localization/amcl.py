@@ -115,8 +115,10 @@ class Amcl:
 
     @property
     def lost_model(self) -> FingerprintModel:
-        """The model the lost test weighs with: the current one at its own outlier class."""
-        return lost_test_model(self.model, self.cfg.lost_test_clutter_probability)
+        """The model the lost test weighs with: the current one at its own outlier class and
+        range std."""
+        cell_xy_m = self.grid.cell_xy_m if self.global_proposal else None
+        return lost_test_model(self.model, self.cfg, cell_xy_m)
 
     def _new_lost_test(self) -> LostTest:
         return LostTest.from_config(self.cfg, self.grid if self.global_proposal else None)

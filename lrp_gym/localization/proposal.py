@@ -282,17 +282,37 @@ class LostTest:
 _LOST_COPIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def lost_test_model(model: FingerprintModel, clutter_probability: float | None) -> FingerprintModel:
-    """The model the lost test weighs with: ``model`` with its own clutter probability
-    (``model`` itself for None or the same value; map, layout and caches shared; the same
-    copy on every call). The test's drift is calibrated for an outlier class of 0.2; a
-    heavier one lets a lost cloud explain most returns as clutter almost as cheaply as a
-    right one, and a kidnap goes unnoticed."""
-    if clutter_probability is None or clutter_probability == model.clutter_probability:
+def lost_test_model(
+    model: FingerprintModel, cfg: LocalizationConfig, cell_xy_m: np.ndarray | None = None
+) -> FingerprintModel:
+    """The model the lost test weighs with: ``model`` at ``cfg.lost_test_clutter_probability``
+    and :func:`lost_test_std_m` (``model`` itself where both match; map, layout and caches
+    shared; the same copy on every call).
+
+    The test's drift is calibrated for an outlier class of 0.2; a heavier one lets a lost
+    cloud explain most returns as clutter almost as cheaply as a right one, and a kidnap goes
+    unnoticed. ``cell_xy_m`` is the lost grid's cell (default: ``cfg.global_grid_m`` square).
+    """
+    clutter = cfg.lost_test_clutter_probability
+    clutter = model.clutter_probability if clutter is None else float(clutter)
+    key = (clutter, lost_test_std_m(cfg, cell_xy_m) ** 2)
+    if key == (model.clutter_probability, model.measurement_var_m2):
         return model
     copies = _LOST_COPIES.setdefault(model, {})
-    if clutter_probability not in copies:
+    if key not in copies:
         other = copy.copy(model)
-        other.clutter_probability = float(clutter_probability)
-        copies[clutter_probability] = other
-    return copies[clutter_probability]
+        other.clutter_probability, other.measurement_var_m2 = key
+        copies[key] = other
+    return copies[key]
+
+
+def lost_test_std_m(cfg: LocalizationConfig, cell_xy_m: np.ndarray | None = None) -> float:
+    """Range std of the lost test's model: ``cfg.lost_test_std_m``, or (None) the weights'
+    ``measurement_std_m`` with the grid's quantisation added. The test weighs cell centres up
+    to half a cell from the robot; a uniform offset in an a x b cell adds (a^2 + b^2) / 24 to
+    a distance's variance, on average over bearings (for a square cell of 10 cm, 2.9 cm in
+    std). Without it a right cloud reads as lost when the std is well below the spacing."""
+    if cfg.lost_test_std_m is not None:
+        return float(cfg.lost_test_std_m)
+    cell = np.full(2, cfg.global_grid_m) if cell_xy_m is None else np.asarray(cell_xy_m, float)
+    return float(np.sqrt(cfg.measurement_std_m**2 + np.sum(cell**2) / 24.0))

@@ -324,3 +324,13 @@ def test_robustness_with_corrupt_model_is_a_clear_error(tmp_path, capsys):
     )
     err = capsys.readouterr().err
     assert code == 2 and "bad.zip" in err and "Traceback" not in err
+
+
+def test_random_rooms_still_reject_a_bad_scenario(tmp_path, capsys):
+    """--random-rooms replaces the scenario's room, but a broken scenario is still an error
+    (the fuzz found `reproduce-paper BAD.yaml --random-rooms 1` exiting 0)."""
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("radar: {noise: [1, 2}\n")
+    code = run_cli(["reproduce-paper", str(bad), "--random-rooms", "1", "--runs", "1"])
+    err = capsys.readouterr().err
+    assert code == 2 and "Traceback" not in err and err.strip()
