@@ -38,6 +38,13 @@ def to_jsonable(value: Any) -> Any:
     return value
 
 
+def _default_file_mode() -> int:
+    """0666 less the process's umask, the mode ``open(path, "w")`` creates files with."""
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """A temporary file next to ``path``, renamed onto it on success and removed on failure."""
@@ -46,6 +53,8 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     fd, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     tmp = Path(name)
+    # mkstemp makes the file private (0600); give it the mode a plain open() would.
+    tmp.chmod(_default_file_mode())
     try:
         yield tmp
         tmp.replace(path)

@@ -214,7 +214,12 @@ class LocalizationConfig(Strict):
     kld_bin_m: PositiveFloat = 0.1
     kld_bin_deg: PositiveFloat = 10.0
     motion_noise: MotionNoiseConfig = MotionNoiseConfig()
-    measurement_std_m: PositiveFloat = 0.03
+    measurement_std_m: PositiveFloat = Field(
+        default=0.03,
+        description="range std of the weights' likelihood (m): the chain's error on a "
+        "reflector's distance (68 % within 2-3 cm, docs/trust.md), not the 7.5 cm range "
+        "resolution; a wider one lets a wrong pose fit merged returns as well as the truth",
+    )
     measurements: Literal["detections", "tracks"] = Field(
         default="detections",
         description="what AMCL weighs: every RCS-gated detection, or the tracked fingerprint",

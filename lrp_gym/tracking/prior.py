@@ -119,6 +119,8 @@ class DistancePrior:
         mu = self.distance_m[:, refl]  # (S, Mt)
         var = np.asarray(variance_m2)[:, None, None] + self.std_m[None, :, refl] ** 2
         z2 = (np.asarray(distance_m)[:, None, None] - mu[None]) ** 2 / var
-        log_terms = -0.5 * (z2 + np.log(2.0 * np.pi * var)) + np.log(self.weight)[None, :, None]
+        with np.errstate(divide="ignore"):  # a hypothesis of weight 0 contributes exp(-inf)
+            log_weight = np.log(self.weight)
+        log_terms = -0.5 * (z2 + np.log(2.0 * np.pi * var)) + log_weight[None, :, None]
         peak = log_terms.max(axis=1)
         return peak + np.log(np.exp(log_terms - peak[:, None, :]).sum(axis=1))
