@@ -7,7 +7,7 @@ them, how it ended) and a summary: the share of converged steps that are wrong, 
 episodes stuck (10 or more such steps in a row), as ``lrp-gym robustness`` counts them.
 
     PYTHONPATH=$PWD .venv/bin/python docs/scripts/default_task_clutter.py --seeds 7100-7299 \
-        [--severity 0.5] [--set localization.lost_alternative_drift_nats=null]
+        [--severity 0.5] [--env LRPRadarNav-v0] [--set localization.lost_alternative_drift_nats=null]
 """
 
 from __future__ import annotations
@@ -29,12 +29,13 @@ def main() -> None:
     ap.add_argument("scenario", nargs="?", default="ipin2023")
     ap.add_argument("--seeds", default="7100-7299", help="FIRST-LAST")
     ap.add_argument("--severity", type=float, default=0.5, help="clutter severity")
+    ap.add_argument("--env", default="LRPRadarNavFast-v0", help="LRPRadarNav-v0: signal fidelity")
     ap.add_argument("--set", action="append", default=[], dest="sets", metavar="KEY=VALUE")
     args = ap.parse_args()
     first, last = (int(s) for s in args.seeds.split("-"))
     over = overrides(args.scenario, args.sets)
     over.setdefault("perturbations", {})["clutter"] = {"severity": args.severity}
-    env = gym.make("LRPRadarNavFast-v0", scenario=args.scenario, task_mode="goal", overrides=over)
+    env = gym.make(args.env, scenario=args.scenario, task_mode="goal", overrides=over)
     policy = PurePursuitPolicy.from_env(env)
     total_conv = total_wrong = stuck = 0
     for seed in range(first, last + 1):

@@ -274,6 +274,14 @@ class LocalizationConfig(Strict):
         description="power of each frame's likelihood (< 1 tempers it: frames' errors are "
         "correlated, so their product would overcount the evidence)",
     )
+    likelihood_correlation_m: PositiveFloat | None = Field(
+        default=0.03,
+        description="length (m) over which the frames' range errors decorrelate along the "
+        "path, rho = exp(-d / L): a frame d after the last weighs likelihood_exponent x "
+        "(1 - rho) / (1 + rho), so a robot at the same spot (static clutter's returns repeat "
+        "there) does not count the same evidence every frame; 0.03: the signal chain's "
+        "errors decorrelate within 6-10 cm; None: every frame weighs likelihood_exponent",
+    )
     mode_min_particles: Annotated[int, Field(ge=0)] = Field(
         default=300,
         description="particles every posterior mode keeps through resampling (weighted by its "

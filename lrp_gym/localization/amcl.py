@@ -26,6 +26,7 @@ from dataclasses import replace
 import numpy as np
 
 from lrp_gym.config import LocalizationConfig
+from lrp_gym.localization.frame_evidence import FrameEvidence
 from lrp_gym.localization.kld import KldBinner, clamped_particle_count
 from lrp_gym.localization.likelihood import FingerprintModel, frame_fit
 from lrp_gym.localization.particle_motion import (
@@ -89,15 +90,14 @@ class Amcl:
                 self._size_xy, cfg.start_cell_m, self._free, max_cells=160_000
             )
         self.lost = self._new_lost_test()
+        self.evidence = FrameEvidence(cfg.likelihood_exponent, cfg.likelihood_correlation_m)
         self._grid_loglik: np.ndarray | None = None
         self._grid_frame: Fingerprint | None = None  # the frame of the lost test's grid
         self._converged = False
         self._pending_global = False
         self.particles = np.zeros((0, 3))
         self.weights = np.zeros(0)
-        self.w_slow = 0.0
-        self.w_fast = 0.0
-        self.p_random = 0.0
+        self.w_slow = self.w_fast = self.p_random = 0.0
         self.n_injected = 0
         self._n_fits = 0
         self._predicted: tuple[np.ndarray, np.ndarray] | None = None
@@ -107,7 +107,7 @@ class Amcl:
         """Another robot's filter: the model, grids and binner shared, its own particles,
         weights and lost test (call :meth:`reset` before use)."""
         new = copy.copy(self)
-        new.lost = self._new_lost_test()
+        new.lost, new.evidence = self._new_lost_test(), copy.copy(self.evidence)
         new.slip = slip_monitor(self.motion_noise, self.cfg)
         new.particles, new.weights = np.zeros((0, 3)), np.zeros(0)
         new._predicted = new._grid_loglik = new._grid_frame = None
@@ -159,13 +159,12 @@ class Amcl:
             p[:, 2] = (p[:, 2] + np.pi) % (2.0 * np.pi) - np.pi
             self.particles = p
         self.weights = np.full(n, 1.0 / n)
-        self.w_slow = 0.0
-        self.w_fast = 0.0
-        self.p_random = 0.0
+        self.w_slow = self.w_fast = self.p_random = 0.0
         self.n_injected = 0
         self._n_fits = 0  # fits averaged since reset: the first one sets both averages
         self._predicted = None
         self.lost.reset()
+        self.evidence.reset()
         if self.slip is not None:
             self.slip.reset()
         self._grid_loglik, self._grid_frame, self._converged = None, None, False
@@ -201,6 +200,7 @@ class Amcl:
         noise = self.motion_noise if self.slip is None else self.slip.noise()
         self.particles = sample_motion(self.particles, odometry, noise, rng)
         self.lost.move(odometry[1])
+        self.evidence.move(odometry[1])
         w = self.weights * self._free(self.particles[:, :2])
         self._predicted = (self.particles, w)  # references: weighting makes new arrays
         if fingerprint is not None and fingerprint.count > 0:
@@ -270,7 +270,7 @@ class Amcl:
         )
         # Tempering: the frames' errors are correlated (multipath persists while the robot
         # moves a few cm), so a product over frames would count the same evidence repeatedly.
-        loglik *= self.cfg.likelihood_exponent
+        loglik *= self.evidence.take()
         shift = float(np.max(np.where(weights > 0.0, loglik, -np.inf)))
         if not np.isfinite(shift):
             shift = 0.0
@@ -286,12 +286,13 @@ class Amcl:
         self.lost.reset()
         n = len(self.particles)
         cell_ll = self.start_grid.log_likelihood(self.model, fingerprint)
-        xy, cells = self.start_grid.draw(cell_ll * self.cfg.likelihood_exponent, n, rng)
+        exponent = self.evidence.restart()  # a new cloud: this frame is its first evidence
+        xy, cells = self.start_grid.draw(cell_ll * exponent, n, rng)
         self.particles = np.column_stack([xy, rng.uniform(-np.pi, np.pi, n)])
         loglik = self.model.log_likelihood(
             self.particles, fingerprint, velocity_xy=particle_velocities(self.particles, speed_mps)
         )
-        log_w = (loglik - cell_ll[cells]) * self.cfg.likelihood_exponent
+        log_w = (loglik - cell_ll[cells]) * exponent
         return np.exp(log_w - np.max(log_w))
 
     def _cloud_marginal(

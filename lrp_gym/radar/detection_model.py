@@ -124,24 +124,35 @@ class FastDetectionModel:
         peak = paths.power_w[order] * proc.coherent_gain2
         phase = paths.phase_rad[order]
         owner = greedy_owner(rb, db, self.res_r, self.res_d, nc)
-        heads = np.flatnonzero(owner == np.arange(len(rb)))
-        wsum = np.bincount(owner, weights=peak, minlength=len(rb))[heads]
-        crb = np.bincount(owner, weights=peak * rb, minlength=len(rb))[heads] / wsum
+        n = len(rb)
+        heads = np.flatnonzero(owner == np.arange(n))
+        rel_r = rb - rb[owner]
         rel_d = (db - db[owner] + nc / 2) % nc - nc / 2  # Doppler relative to the head
-        cdb = db[heads] + np.bincount(owner, weights=peak * rel_d, minlength=len(rb))[heads] / wsum
         # coherent sum, each path weighted by the window response at its offset from the head
-        off_r = np.abs(rb - rb[owner])
-        off_d = np.abs(rel_d)
         resp = np.sqrt(
-            np.interp(off_r, np.arange(len(self.env_r)) * self.step, self.env_r)
-            * np.interp(off_d, np.arange(len(self.env_d)) * self.step, self.env_d)
+            np.interp(np.abs(rel_r), np.arange(len(self.env_r)) * self.step, self.env_r)
+            * np.interp(np.abs(rel_d), np.arange(len(self.env_d)) * self.step, self.env_d)
         )
-        z = np.sqrt(peak) * resp * np.exp(1j * phase)
-        amp = (
-            np.bincount(owner, weights=z.real, minlength=len(rb))[heads]
-            + 1j * np.bincount(owner, weights=z.imag, minlength=len(rb))[heads]
+        # The beat signal starts at sample 0, so a path's response at an offset of d bins
+        # from its own peak carries a linear phase pi d (N - 1) / N (per axis).
+        lin = np.pi * (rel_r * (self.ns - 1) / self.ns + rel_d * (nc - 1) / nc)
+        z = np.sqrt(peak) * resp * np.exp(1j * (phase + lin))
+        amp = np.bincount(owner, weights=z.real, minlength=n) + 1j * np.bincount(
+            owner, weights=z.imag, minlength=n
         )
-        return crb, cdb, np.abs(amp) ** 2
+        # The peak of |sum z_i W(x - x_i)|^2, to first order in the main lobe's curvature, is
+        # the centroid with weights Re(conj(A) z_i) / |A|^2: in phase the paths pull the peak
+        # together, out of phase one pushes it away. A power centroid ignores the carrier
+        # phase, so its error would stay put over the many frames a few mm of motion turns
+        # the phases through (the signal chain's errors decorrelate within a few cm).
+        a = amp[owner]
+        w = (a.real * z.real + a.imag * z.imag) / np.maximum(np.abs(a) ** 2, 1e-300)
+        # near-cancellation makes the weights large: the peak stays within a cell of the head
+        shift_r = np.bincount(owner, weights=w * rel_r, minlength=n)[heads]
+        shift_d = np.bincount(owner, weights=w * rel_d, minlength=n)[heads]
+        crb = rb[heads] + np.clip(shift_r, -self.res_r, self.res_r)
+        cdb = db[heads] + np.clip(shift_d, -self.res_d, self.res_d)
+        return crb, cdb, np.abs(amp[heads]) ** 2
 
     def _peaks(
         self, cpk: np.ndarray, rng: np.random.Generator

@@ -167,15 +167,15 @@ def _default_task(seeds, overrides=None):
 
 def test_confidence_is_roughly_calibrated_on_the_default_task():
     """A few hundred seeded steps of the default task. Loose bounds: the confident steps are
-    localised, the unconfident ones less so, and a converged flag is almost never wrong."""
+    localised, the unconfident ones no more often, and a converged flag is almost never wrong."""
     from lrp_gym.localization.metrics import trust_metrics
 
     errors, conv, conf = _default_task(range(7000, 7016))
     assert len(errors) >= 150
     high = conf >= 0.8
     assert high.sum() >= 50 and np.mean(errors[high] < 0.2) >= 0.8
-    if (~high).sum() >= 10:
-        assert np.mean(errors[~high] < 0.2) < np.mean(errors[high] < 0.2)
+    if (~high).sum() >= 10:  # unsure may be right too (cautious); never surer than sure
+        assert np.mean(errors[~high] < 0.2) <= np.mean(errors[high] < 0.2)
     m = trust_metrics([errors], [conv], [conf])
     assert m["confidently_wrong_rate"] <= 0.05
 
