@@ -16,48 +16,30 @@ import argparse
 import sys
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 
-import lrp_gym  # noqa: F401  (registers the ids)
-from agents.pure_pursuit import PurePursuitPolicy
-
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from range_residuals import reflector_residuals  # noqa: E402
+from range_residuals import driven_frames, reflector_residuals  # noqa: E402
 
 BINS_M = ((0.0, 0.02), (0.02, 0.06), (0.06, 0.1), (0.1, 0.2), (0.2, 0.4), (0.4, 0.8), (0.8, 5.0))
 
 
 def error_pairs(env_id: str, episodes: int, severity: float, seed: int) -> np.ndarray:
     """Rows (distance driven between the frames in m, error 1, error 2)."""
-    over = {"perturbations": {"clutter": {"severity": severity}}} if severity > 0 else {}
-    env = gym.make(env_id, task_mode="goal", overrides=over)
-    base = env.unwrapped
-    policy = PurePursuitPolicy.from_env(env)
+    history: dict[int, list] = {}
+    for k, base in driven_frames(env_id, episodes, severity, seed):
+        gated = base.tracker.gated_fingerprint()
+        errors = reflector_residuals(base.localizer.model, gated, base.pose[:2])
+        history.setdefault(k, []).append((base.pose[:2].copy(), errors))
     pairs = []
-    for k in range(episodes):
-        policy.reset()
-        obs, _ = env.reset(seed=seed + k)
-        done, history = False, []
-        while not done:
-            obs, _, terminated, truncated, _ = env.step(policy.act(obs))
-            done = terminated or truncated
-            gated = base.tracker.gated_fingerprint()
-            history.append(
-                (
-                    base.pose[:2].copy(),
-                    reflector_residuals(base.localizer.model, gated, base.pose[:2]),
-                )
-            )
-        for i, (p1, r1) in enumerate(history):
-            for p2, r2 in history[i + 1 : i + 9]:
+    for frames in history.values():
+        for i, (p1, r1) in enumerate(frames):
+            for p2, r2 in frames[i + 1 : i + 9]:
+                if len(r2) != len(r1):  # a suspect reflector left the map in between
+                    continue
                 d = float(np.hypot(*(p1 - p2)))
-                pairs += [
-                    (d, a, b)
-                    for a, b in zip(r1, r2, strict=True)
-                    if abs(a) < 0.075 and abs(b) < 0.075
-                ]
-    env.close()
+                both = (np.abs(r1) < 0.075) & (np.abs(r2) < 0.075)
+                pairs += [(d, a, b) for a, b in zip(r1[both], r2[both], strict=True)]
     return np.array(pairs).reshape(-1, 3)
 
 

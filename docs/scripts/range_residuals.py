@@ -14,6 +14,7 @@ reflector's true distance against the nearest measured one (its own return, if a
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterator
 
 import gymnasium as gym
 import numpy as np
@@ -53,17 +54,12 @@ def reflector_residuals(model, fingerprint, xy: np.ndarray) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros(0)
 
 
-def collect(env_id: str, episodes: int, severity: float, seed: int) -> dict[str, np.ndarray]:
-    """Residuals over ``episodes`` default-task runs: every measured distance against the
-    nearest true one at the robot's position and at a random one, and every reflector's true
-    distance against the nearest measured one."""
+def driven_frames(env_id: str, episodes: int, severity: float, seed: int) -> Iterator[tuple]:
+    """``(episode, env.unwrapped)`` after every step of ``episodes`` default-task runs of pure
+    pursuit (seeds ``seed``, ``seed + 1``, ...), with clutter of ``severity``."""
     over = {"perturbations": {"clutter": {"severity": severity}}} if severity > 0 else {}
     env = gym.make(env_id, task_mode="goal", overrides=over)
-    base = env.unwrapped
     policy = PurePursuitPolicy.from_env(env)
-    rng = np.random.default_rng(seed)
-    rows: dict[str, list[np.ndarray]] = {"measured, true": [], "measured, random": []}
-    rows["reflector, true"] = []
     for k in range(episodes):
         policy.reset()
         obs, _ = env.reset(seed=seed + k)
@@ -71,12 +67,23 @@ def collect(env_id: str, episodes: int, severity: float, seed: int) -> dict[str,
         while not done:
             obs, _, terminated, truncated, _ = env.step(policy.act(obs))
             done = terminated or truncated
-            model, gated = base.localizer.model, base.tracker.gated_fingerprint()
-            rows["measured, true"].append(nearest_residuals(model, gated, base.pose[:2]))
-            elsewhere = base.localizer.uniform_particles(1, rng)[0, :2]
-            rows["measured, random"].append(nearest_residuals(model, gated, elsewhere))
-            rows["reflector, true"].append(reflector_residuals(model, gated, base.pose[:2]))
+            yield k, env.unwrapped
     env.close()
+
+
+def collect(env_id: str, episodes: int, severity: float, seed: int) -> dict[str, np.ndarray]:
+    """Residuals over ``episodes`` default-task runs: every measured distance against the
+    nearest true one at the robot's position and at a random one, and every reflector's true
+    distance against the nearest measured one."""
+    rng = np.random.default_rng(seed)
+    rows: dict[str, list[np.ndarray]] = {"measured, true": [], "measured, random": []}
+    rows["reflector, true"] = []
+    for _, base in driven_frames(env_id, episodes, severity, seed):
+        model, gated = base.localizer.model, base.tracker.gated_fingerprint()
+        rows["measured, true"].append(nearest_residuals(model, gated, base.pose[:2]))
+        elsewhere = base.localizer.uniform_particles(1, rng)[0, :2]
+        rows["measured, random"].append(nearest_residuals(model, gated, elsewhere))
+        rows["reflector, true"].append(reflector_residuals(model, gated, base.pose[:2]))
     return {name: np.concatenate(r) for name, r in rows.items()}
 
 

@@ -5,33 +5,31 @@ distance every frame, and so does a reflector's error from multipath or from a s
 merged into its range cell. A robot that stands, turns on the spot or creeps would count that
 evidence again each frame, and under unmapped clutter a wrong pose that explains the
 scatterers wins by repetition. Measured on the signal chain (``docs/trust.md``, session 16):
-a reflector's range errors two frames apart correlate 0.4-0.6 at the same spot (thermal noise
-and millimetres of motion, which turn the carrier phases, take the rest) and 0.0-0.1 after
-6-10 cm.
+a reflector's range errors two frames apart correlate about 0.6 at the same spot (thermal
+noise and millimetres of motion, which turn the carrier phases, take the rest) and 0.0-0.2
+after 6-10 cm (``docs/scripts/frame_correlation.py``).
 
 Model: the evidence is a stationary process along the path with correlation
 ``rho(d) = exp(-d / L)``. For such a process the effective number of independent samples among
 n frames a step ``d`` apart is ``n (1 - rho) / (1 + rho)``, so each frame's log-likelihood is
 scaled by ``(1 - rho) / (1 + rho)`` on top of the constant tempering: 1 for the first frame
-(and after a long way), 0 for a frame at the same spot as the last one.
+(and after a long way), 0 for a frame at the same spot as the last one. The correlation at the
+same spot is taken as 1 (a static scatterer's return repeats exactly there): with the 0.6 of
+the reflectors' own errors (a frame there still weighing 0.25) the model bought nothing under
+clutter (docs/trust.md).
 """
 
 from __future__ import annotations
 
 import math
 
-#: Correlation of two frames' evidence at the same spot. 1: static clutter's returns repeat
-#: exactly there. Measured under clutter 0.5 (docs/trust.md): 0.6 here (a turn on the spot
-#: still weighs 0.25) gives back nearly all that the model buys.
-STANDING_CORRELATION = 1.0
-
 
 def independence_weight(moved_m: float, correlation_m: float | None) -> float:
-    """``(1 - rho) / (1 + rho)`` with ``rho = STANDING_CORRELATION exp(-moved_m /
-    correlation_m)``; 1 if ``correlation_m`` is None (frames treated as independent)."""
+    """``(1 - rho) / (1 + rho)`` with ``rho = exp(-moved_m / correlation_m)``; 1 if
+    ``correlation_m`` is None (frames treated as independent)."""
     if correlation_m is None or not math.isfinite(moved_m):
         return 1.0
-    rho = STANDING_CORRELATION * math.exp(-max(moved_m, 0.0) / correlation_m)
+    rho = math.exp(-max(moved_m, 0.0) / correlation_m)
     return (1.0 - rho) / (1.0 + rho)
 
 
