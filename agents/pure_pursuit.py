@@ -7,7 +7,10 @@ Speed is the smallest of four limits: the robot's top speed, a lateral-accelerat
 curvature (slow in sharp bends), an approach limit near the goal (do not overshoot the goal
 tolerance within one frame), and an uncertainty limit (creep while the pose estimate is spread
 out). While the heading is unknown the bearing to any target is meaningless, so the robot creeps
-straight ahead: consistent motion is what lets the particle filter resolve the heading. When
+straight ahead: consistent motion is what lets the particle filter resolve the heading (a turn
+on the spot shows the radar nothing new). With ``avoid_walls_when_unsure`` and the room
+(:meth:`PurePursuitPolicy.from_env`) it creeps only where the floor ahead of the *estimated*
+pose is free for a few steps, and turns on the spot where it is not (off by default). When
 the lookahead point lies far to the side or behind, the robot turns on the spot.
 
 It is a :class:`~lrp_gym.experiments.episodes.Policy` (``reset``, ``act``) and also exposes the
@@ -22,6 +25,11 @@ from typing import Any
 import numpy as np
 
 from lrp_gym.envs.observations import EstimatedPoseObservation
+from lrp_gym.world.room import Room
+
+#: While the heading is unknown, a creep step is taken only where the floor ahead of the
+#: estimated pose is free for this many steps (4 x 7.5 cm at the default creep speed).
+CREEP_LOOKAHEAD_STEPS = 4
 
 
 @dataclass(frozen=True)
@@ -30,8 +38,9 @@ class PurePursuitConfig:
 
     Attributes
     ----------
-    max_speed_mps, max_turn_rate_rps : float
-        Robot limits; the action is ``(speed / max_speed, turn / max_turn_rate)``.
+    max_speed_mps, max_turn_rate_rps, max_reverse_mps : float
+        Robot limits; the action is ``(speed / max_speed, turn / max_turn_rate)``, a reverse
+        speed scaled by ``max_reverse_mps`` instead (as the env reads it).
     frame_period_s : float
         Time one action is held (the env's frame period).
     lookahead_m : float
@@ -55,9 +64,21 @@ class PurePursuitConfig:
         Bearing of the lookahead point beyond which the robot turns on the spot.
     turn_gain : float
         Turn rate per radian of bearing when turning on the spot (1/s).
+    avoid_walls_when_unsure : bool
+        Off by default. On: while the heading is unknown, creep only where the floor ahead of
+        the estimated pose is free (``creep_margin_m``), and turn on the spot elsewhere. It
+        removed nearly every crash of the patrol matrix but costs evidence (turns weigh
+        nothing) and made the default task under clutter more often confidently wrong
+        (docs/trust.md, "The crashes were blind creeps").
+    creep_margin_m : float
+        With ``avoid_walls_when_unsure``: the robot creeps only where its disc, widened by this
+        margin, stays clear of walls and obstacles for :data:`CREEP_LOOKAHEAD_STEPS` creep steps
+        ahead of the estimated pose, and turns on the spot elsewhere. Needs the room
+        (:meth:`from_env`).
     """
 
     max_speed_mps: float = 2.0
+    max_reverse_mps: float = 0.2
     max_turn_rate_rps: float = float(np.pi)
     frame_period_s: float = 0.25
     lookahead_m: float = 0.45
@@ -71,6 +92,8 @@ class PurePursuitConfig:
     creep_speed_mps: float = 0.3
     turn_in_place_rad: float = 1.2
     turn_gain: float = 3.0
+    avoid_walls_when_unsure: bool = False
+    creep_margin_m: float = 0.05
 
 
 def lookahead_point(points: np.ndarray, distance_m: float) -> np.ndarray:
@@ -112,24 +135,38 @@ class PurePursuitPolicy:
     ----------
     config : PurePursuitConfig, optional
         Gains and robot limits; see :meth:`from_env` to take the limits from an env.
+    room : Room, optional
+        The room's geometry (walls, obstacles), for the clearance of a creep while the heading
+        is unknown; None: creep blind, as far as the creep speed goes.
+    robot_radius_m : float
+        The robot's radius (m), with ``room``.
     """
 
-    def __init__(self, config: PurePursuitConfig | None = None) -> None:
+    def __init__(
+        self,
+        config: PurePursuitConfig | None = None,
+        room: Room | None = None,
+        robot_radius_m: float = 0.0,
+    ) -> None:
         self.config = config or PurePursuitConfig()
+        self.room = room
+        self.robot_radius_m = float(robot_radius_m)
 
     @classmethod
     def from_env(cls, env: Any, **gains: float) -> PurePursuitPolicy:
-        """A policy whose robot limits and frame period match ``env`` (a gym env or wrapper)."""
+        """A policy whose robot limits, frame period and room match ``env`` (a gym env or
+        wrapper)."""
         base = env.unwrapped
         lim = base.world.robot
         cfg = replace(
             PurePursuitConfig(),
             max_speed_mps=float(lim.max_speed_mps),
             max_turn_rate_rps=float(lim.max_turn_rate_rps),
+            max_reverse_mps=float(lim.max_reverse_mps),
             frame_period_s=float(base.cfg.task.frame_period_s),
             **gains,
         )
-        return cls(cfg)
+        return cls(cfg, base.world.room, float(lim.radius_m))
 
     def control(self, obs: np.ndarray) -> tuple[float, float]:
         """Speed (m/s) and turn rate (rad/s) for one flat observation."""
@@ -161,6 +198,8 @@ class PurePursuitPolicy:
         if std[2] >= c.uncertain_heading_std_rad:
             # Heading unknown: the bearing to the target is meaningless. Creep straight so the
             # filter sees consistent motion and can resolve the heading.
+            if c.avoid_walls_when_unsure:
+                return self._creep(obs[f["position"]], obs[f["heading"]])
             return c.creep_speed_mps, 0.0
         if obs[f["converged"]][0] < 0.5:
             frac = 0.0
@@ -177,6 +216,27 @@ class PurePursuitPolicy:
             # Keep the arc when the turn rate saturates: slow down instead of cutting wider.
             v = min(v, c.max_turn_rate_rps / abs(curvature))
         return float(v), float(v * curvature)
+
+    def _creep(self, position: np.ndarray, heading: np.ndarray) -> tuple[float, float]:
+        """Straight creep while the heading is unknown where the floor ahead of the estimated
+        pose (``position`` as a share of the room, ``heading`` as cos, sin) is free for
+        :data:`CREEP_LOOKAHEAD_STEPS` steps; a turn on the spot where it is not."""
+        c = self.config
+        step_m = c.creep_speed_mps * c.frame_period_s
+        if self.room is None or step_m <= 0.0:
+            return c.creep_speed_mps, 0.0
+        xy = np.asarray(position, float) * self.room.size_m[:2]
+        norm = float(np.hypot(*heading))
+        ahead = np.asarray(heading, float) / norm if norm > 0.0 else np.array([1.0, 0.0])
+        # A cushion of several steps: the estimate may be a few cm off, and a creep that only
+        # just fits zig-zags into a corner one short step after each turn.
+        reach = np.linspace(0.0, CREEP_LOOKAHEAD_STEPS * step_m, 4 * CREEP_LOOKAHEAD_STEPS + 1)
+        clearance = self.robot_radius_m + c.creep_margin_m
+        if np.all(self.room.free(xy + reach[:, None] * ahead, clearance)):
+            return c.creep_speed_mps, 0.0
+        # Backing away instead (as much evidence as a step forward) was measured and crashed
+        # as often as the blind creep: the heading that points ahead is unsure behind too.
+        return 0.0, 0.5 * c.max_turn_rate_rps
 
     def predict(
         self,
@@ -195,7 +255,8 @@ class PurePursuitPolicy:
         out = np.empty((batch.shape[0], 2), dtype=np.float32)
         for i, row in enumerate(batch):
             v, w = self.control(row)
-            out[i] = (v / c.max_speed_mps, w / c.max_turn_rate_rps)
+            scale = c.max_speed_mps if v >= 0.0 else max(c.max_reverse_mps, 1e-9)
+            out[i] = (v / scale, w / c.max_turn_rate_rps)
         np.clip(out, -1.0, 1.0, out=out)
         return (out[0] if obs.ndim == 1 else out), state
 

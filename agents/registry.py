@@ -165,6 +165,30 @@ def summary_table(summary: dict[str, Any], title: str = "evaluation"):
     return t
 
 
+def reliability_table(rows: list[dict[str, Any]], title: str = "confidence reliability"):
+    """A rich Table of :func:`lrp_gym.localization.metrics.reliability`'s bins: per band of
+    the localisation confidence, its steps, the mean confidence (a claim: wrong at most
+    1 - c of the time) and the shares localised and wrong (> 0.3 m)."""
+    from rich.table import Table
+
+    t = Table(title=title)
+    for name in ("confidence", "steps", "mean", "localised", "wrong (> 0.3 m)", "claim 1 - c"):
+        t.add_column(name, justify="right")
+    for r in rows:
+        if not r["steps"]:
+            continue
+        wrong = r.get("wrong_share")
+        t.add_row(
+            f"{r['lo']:g}-{r['hi']:g}",
+            str(r["steps"]),
+            f"{r['mean_confidence']:.3f}",
+            f"{100 * r['localised_share']:.1f} %",
+            "-" if wrong is None else f"{100 * wrong:.1f} %",
+            f"{100 * (1 - r['mean_confidence']):.1f} %",
+        )
+    return t
+
+
 __all__ = [
     "AGENTS",
     "DEFAULT_MODEL",
@@ -172,5 +196,6 @@ __all__ = [
     "SB3Policy",
     "load_ppo",
     "make_agent",
+    "reliability_table",
     "summary_table",
 ]

@@ -4,7 +4,9 @@ Pure pursuit on the env's default task (unknown start pose and heading, sampled 
 detections fidelity) with unmapped static scatterers (``perturbations.clutter``). Prints one
 line per episode (steps, converged steps, converged steps off by > 0.3 m, the longest run of
 them, how it ended) and a summary: the share of converged steps that are wrong, and the
-episodes stuck (10 or more such steps in a row), as ``lrp-gym robustness`` counts them.
+episodes stuck (10 or more such steps in a row), as ``lrp-gym robustness`` counts them, and
+how far the confidence can be believed: the wrong share (> 0.3 m) of the steps in each band of
+``info["localization_confidence"]``, finer near 1 than ``lrp-gym evaluate``'s reliability bins.
 
     PYTHONPATH=$PWD .venv/bin/python docs/scripts/default_task_clutter.py --seeds 7100-7299 \
         [--severity 0.5] [--env LRPRadarNav-v0] [--set localization.lost_alternative_drift_nats=null]
@@ -15,6 +17,7 @@ from __future__ import annotations
 import argparse
 
 import gymnasium as gym
+import numpy as np
 
 import lrp_gym  # noqa: F401  (registers the ids)
 from agents.pure_pursuit import PurePursuitPolicy
@@ -22,22 +25,41 @@ from lrp_gym.commands._common import overrides
 
 WRONG_M = 0.3
 STUCK_FRAMES = 10
+#: Confidence bands of the reliability table: ``converged`` starts at 0.9.
+BANDS = (0.0, 0.5, 0.8, 0.9, 0.95, 0.99, 1.0)
+
+
+def reliability_table(confidence: np.ndarray, wrong: np.ndarray) -> str:
+    """Per confidence band: steps, their mean confidence and the share that is wrong."""
+    lines = ["confidence band | steps | mean confidence | wrong (> 0.3 m)"]
+    for lo, hi in zip(BANDS[:-1], BANDS[1:], strict=True):
+        sel = (confidence >= lo) & ((confidence < hi) | (hi == BANDS[-1]))
+        if sel.any():
+            lines.append(
+                f"{lo:.2f}-{hi:.2f} | {int(sel.sum())} | {confidence[sel].mean():.3f} | "
+                f"{100 * wrong[sel].mean():.1f} %"
+            )
+        else:
+            lines.append(f"{lo:.2f}-{hi:.2f} | 0 | - | -")
+    return "\n".join(lines)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenario", nargs="?", default="ipin2023")
     ap.add_argument("--seeds", default="7100-7299", help="FIRST-LAST")
-    ap.add_argument("--severity", type=float, default=0.5, help="clutter severity")
+    ap.add_argument("--severity", type=float, default=0.5, help="clutter severity (0: none)")
     ap.add_argument("--env", default="LRPRadarNavFast-v0", help="LRPRadarNav-v0: signal fidelity")
     ap.add_argument("--set", action="append", default=[], dest="sets", metavar="KEY=VALUE")
     args = ap.parse_args()
     first, last = (int(s) for s in args.seeds.split("-"))
     over = overrides(args.scenario, args.sets)
-    over.setdefault("perturbations", {})["clutter"] = {"severity": args.severity}
+    if args.severity > 0.0:  # 0: the unperturbed task
+        over.setdefault("perturbations", {})["clutter"] = {"severity": args.severity}
     env = gym.make(args.env, scenario=args.scenario, task_mode="goal", overrides=over)
     policy = PurePursuitPolicy.from_env(env)
     total_conv = total_wrong = stuck = 0
+    confidences, wrongs = [], []
     for seed in range(first, last + 1):
         policy.reset()
         obs, _ = env.reset(seed=seed)
@@ -47,7 +69,10 @@ def main() -> None:
             obs, _, terminated, truncated, info = env.step(policy.act(obs))
             done = terminated or truncated
             steps += 1
-            is_wrong = bool(info["converged"] and info["position_error_m"] > WRONG_M)
+            off = bool(info["position_error_m"] > WRONG_M)
+            confidences.append(float(info["localization_confidence"]))
+            wrongs.append(off)
+            is_wrong = bool(info["converged"]) and off
             conv += bool(info["converged"])
             wrong += is_wrong
             run = run + 1 if is_wrong else 0
@@ -66,6 +91,7 @@ def main() -> None:
         f"({100 * total_wrong / max(total_conv, 1):.1f} %), {stuck} stuck "
         f"(>= {STUCK_FRAMES} wrong converged steps in a row)"
     )
+    print(reliability_table(np.array(confidences), np.array(wrongs)))
 
 
 if __name__ == "__main__":

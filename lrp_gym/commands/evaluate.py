@@ -204,6 +204,8 @@ def evaluate(
         print_json(doc)
     else:
         console.print(ev.summary_table(summary, title=title))
+        if summary.get("reliability"):
+            console.print(ev.reliability_table(summary["reliability"]))
     if plot_path is not None:
         from lrp_gym.localization.plotting import plot_reliability
 

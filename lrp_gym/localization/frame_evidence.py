@@ -2,12 +2,12 @@
 
 At one spot the radar sees the same room: a static scatterer's return lands at the same
 distance every frame, and so does a reflector's error from multipath or from a scatterer
-merged into its range cell. A robot that stands, turns on the spot or creeps would count that
-evidence again each frame, and under unmapped clutter a wrong pose that explains the
-scatterers wins by repetition. Measured on the signal chain (``docs/trust.md``, session 16):
-a reflector's range errors two frames apart correlate about 0.6 at the same spot (thermal
-noise and millimetres of motion, which turn the carrier phases, take the rest) and 0.0-0.2
-after 6-10 cm (``docs/scripts/frame_correlation.py``).
+merged into its range cell. A robot that stands, turns on the spot (the radar, on its axis,
+sees no change) or creeps would count that evidence again each frame, and under unmapped
+clutter a wrong pose that explains the scatterers wins by repetition. Measured on the signal
+chain (``docs/trust.md``, session 16): a reflector's range errors two frames apart correlate
+about 0.6 at the same spot (thermal noise and millimetres of motion, which turn the carrier
+phases, take the rest) and 0.0-0.2 after 6-10 cm (``docs/scripts/frame_correlation.py``).
 
 Model: the evidence is a stationary process along the path with correlation
 ``rho(d) = exp(-d / L)``. For such a process the effective number of independent samples among

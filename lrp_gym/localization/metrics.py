@@ -41,19 +41,38 @@ def stuck_episodes(episodes: Sequence[tuple[np.ndarray, np.ndarray]]) -> int:
     return sum(longest_wrong_stretch(e, c) >= STUCK_WRONG_FRAMES for e, c in episodes)
 
 
-def reliability(
-    confidence: np.ndarray, errors_m: np.ndarray, bins: int = 5, localised_m: float = LOCALISED_M
-) -> list[dict[str, float | int | None]]:
-    """Reliability diagram: per confidence bin, the steps in it and their localised share.
+#: Confidence bin edges of :func:`reliability`: finer near 1, where ``converged`` starts (0.9)
+#: and where a confidence's claim (1 - c: how often it may be wrong) is a few per cent.
+RELIABILITY_EDGES = (0.0, 0.2, 0.4, 0.6, 0.8, 0.9, 0.95, 0.99, 1.0)
 
-    A calibrated confidence has ``localised_share`` close to the bin's mean confidence.
+
+def reliability(
+    confidence: np.ndarray,
+    errors_m: np.ndarray,
+    bins: int | Sequence[float] = RELIABILITY_EDGES,
+    localised_m: float = LOCALISED_M,
+    wrong_m: float = CONFIDENTLY_WRONG_M,
+) -> list[dict[str, float | int | None]]:
+    """Reliability diagram: per confidence bin, the steps in it, their localised share and
+    their wrong share.
+
+    ``bins`` is the bins' edges from 0 to 1 (default :data:`RELIABILITY_EDGES`) or a number of
+    equal bins; a confidence of 1 falls in the last bin. A calibrated confidence has
+    ``localised_share`` close to the bin's mean confidence; ``wrong_share`` (off by more than
+    ``wrong_m``, as the confidently-wrong rate counts) is what a confidence near 1 must keep
+    below ``1 - mean_confidence``.
     """
     confidence = np.asarray(confidence, dtype=float)
-    ok = np.asarray(errors_m) < localised_m
-    edges = np.linspace(0.0, 1.0, bins + 1)
-    idx = np.clip(np.digitize(confidence, edges[1:-1]), 0, bins - 1)
+    err = np.asarray(errors_m, dtype=float)
+    ok = err < localised_m
+    wrong = err > wrong_m
+    edges = np.linspace(0.0, 1.0, bins + 1) if isinstance(bins, int) else np.asarray(bins, float)
+    if edges[0] != 0.0 or edges[-1] != 1.0 or np.any(np.diff(edges) <= 0.0):
+        raise ValueError(f"bins: edges must rise from 0 to 1, got {list(edges)}")
+    n_bins = len(edges) - 1
+    idx = np.clip(np.digitize(confidence, edges[1:-1]), 0, n_bins - 1)
     out = []
-    for b in range(bins):
+    for b in range(n_bins):
         sel = idx == b
         n = int(sel.sum())
         out.append(
@@ -63,6 +82,7 @@ def reliability(
                 "steps": n,
                 "mean_confidence": float(confidence[sel].mean()) if n else None,
                 "localised_share": float(ok[sel].mean()) if n else None,
+                "wrong_share": float(wrong[sel].mean()) if n else None,
             }
         )
     return out

@@ -109,3 +109,20 @@ def test_bad_inputs_raise_value_error_naming_the_argument(tmp_path):
         make_agent("ppo", env, bad)
     with pytest.raises(ValueError, match="^model_path: no such model"):
         make_agent("ppo", env, tmp_path / "missing.zip")
+
+
+def test_reliability_table_shows_each_band_with_steps_its_claim_and_its_outcome():
+    from rich.console import Console
+
+    from agents.registry import reliability_table
+    from lrp_gym.localization.metrics import reliability
+
+    conf = np.array([0.92, 0.93, 0.995, 0.999])
+    errors = np.array([0.5, 0.05, 0.01, 0.02])
+    console = Console(width=120, record=True)
+    console.print(reliability_table(reliability(conf, errors)))
+    text = console.export_text()
+    band = next(line for line in text.splitlines() if "0.9-0.95" in line)
+    # 2 steps, mean 0.925, half localised, half wrong, claim 7.5 %
+    assert all(s in band for s in ("2", "0.925", "50.0 %", "7.5 %")), band
+    assert "0.2-0.4" not in text  # empty bands are left out

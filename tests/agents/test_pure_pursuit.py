@@ -110,3 +110,45 @@ def test_predict_batch_matches_single_and_rejects_wrong_shape():
     np.testing.assert_allclose(batch[1], pol.predict(obs[1])[0])
     with pytest.raises(ValueError, match="observation"):
         pol.predict(np.zeros(7))
+
+
+def test_a_blind_creep_stops_short_of_the_wall_ahead_of_the_estimate():
+    """Heading unknown (std 2 rad): the robot creeps straight where the floor ahead of the
+    estimated pose is free for a few steps, and turns on the spot where it is not."""
+    from agents.pure_pursuit import CREEP_LOOKAHEAD_STEPS
+    from lrp_gym.world.room import Box, Room
+
+    room = Room(
+        size_m=np.array([5.0, 5.0, 4.0]),
+        obstacles=(Box(np.array([2.0, 2.0, 0.0]), np.array([3.0, 3.0, 1.0])),),
+    )
+    radius = 0.2
+    path = WaypointPath.from_points(np.array([[1.0, 1.0], [4.0, 1.0]]))
+    blind = PurePursuitPolicy(PurePursuitConfig(avoid_walls_when_unsure=True), room, radius)
+    c = blind.config
+    reach = CREEP_LOOKAHEAD_STEPS * c.creep_speed_mps * c.frame_period_s  # 0.3 m
+    unsure = (0.5, 0.5, 2.0)
+    creep, turn = (c.creep_speed_mps, 0.0), (0.0, 0.5 * c.max_turn_rate_rps)
+
+    def act(pose, pol=blind):
+        return pol.control(_obs(np.array(pose, float), path, std=unsure, converged=False))
+
+    edge = radius + c.creep_margin_m  # nearest the disc's centre may come to a wall
+    assert act([1.0, 1.0, 0.0]) == pytest.approx(creep)  # in the open
+    assert act([edge + reach + 0.01, 1.0, np.pi]) == pytest.approx(creep)  # just enough room
+    assert act([edge + reach - 0.01, 1.0, np.pi]) == pytest.approx(turn)  # not quite: turn
+    assert act([edge + 0.01, 1.0, 0.0]) == pytest.approx(creep)  # back to the wall: go
+    # The same at the obstacle's face (x = 2), towards it and away from it.
+    assert act([2.0 - edge - reach + 0.01, 2.5, 0.0]) == pytest.approx(turn)
+    assert act([2.0 - edge - 0.01, 2.5, np.pi]) == pytest.approx(creep)
+    # Without the room, or with the option off (the default), the creep is blind, as before.
+    assert act([edge + 0.01, 1.0, np.pi], PurePursuitPolicy()) == pytest.approx(creep)
+    default = PurePursuitPolicy(room=room, robot_radius_m=radius)
+    assert act([edge + reach - 0.01, 1.0, np.pi], default) == pytest.approx(creep)
+
+
+def test_predict_scales_a_reverse_speed_by_the_reverse_limit():
+    pol = PurePursuitPolicy(PurePursuitConfig(max_speed_mps=2.0, max_reverse_mps=0.2))
+    pol.control = lambda obs: (-0.1, 0.0)  # a controller that backs off at 0.1 m/s
+    action, _ = pol.predict(np.zeros(16))
+    assert action[0] == pytest.approx(-0.5)  # the env multiplies by max_reverse_mps

@@ -51,3 +51,21 @@ def test_stuck_wrong_rate_is_per_episode_not_per_step():
     m = trust_metrics(*zip(stuck, brief, clean, strict=True))
     assert m["stuck_wrong_rate"] == pytest.approx(1 / 3)
     assert m["confidently_wrong_rate"] == pytest.approx(0.5)
+
+
+def test_reliability_bins_resolve_the_converged_band_and_count_wrong_steps():
+    conf = np.array([0.1, 0.91, 0.93, 0.97, 0.995, 1.0, 1.0])
+    errors = np.array([1.0, 0.25, 0.5, 0.05, 0.4, 0.01, 0.02])
+    rows = {(r["lo"], r["hi"]): r for r in reliability(conf, errors)}
+    assert rows[(0.9, 0.95)]["steps"] == 2
+    assert rows[(0.9, 0.95)]["localised_share"] == 0.0  # 0.25 m: not localised, not wrong
+    assert rows[(0.9, 0.95)]["wrong_share"] == 0.5  # 0.5 m > 0.3 m
+    assert rows[(0.99, 1.0)]["steps"] == 3  # a confidence of 1 falls in the last bin
+    assert rows[(0.99, 1.0)]["wrong_share"] == pytest.approx(1 / 3)
+    assert rows[(0.2, 0.4)]["steps"] == 0 and rows[(0.2, 0.4)]["wrong_share"] is None
+    assert len(reliability(conf, errors, bins=4)) == 4
+
+
+def test_reliability_rejects_edges_that_do_not_span_0_to_1():
+    with pytest.raises(ValueError, match="bins"):
+        reliability(np.array([0.5]), np.array([0.1]), bins=[0.0, 0.5, 0.9])

@@ -59,3 +59,23 @@ def test_merge_kernel_numba_and_numpy_agree():
         b = greedy_owner(rb, db, 2.0, 1.8, 32, use_numba=False)
         np.testing.assert_array_equal(a, b)
         assert np.all(a <= np.arange(n)) and np.all(a[a] == a)  # owners are heads
+
+
+@pytest.mark.parametrize("fidelity", ["signal", "detections"])
+def test_a_turn_on_the_spot_changes_no_detection(paper_cfg, fidelity):
+    # The radar sits on the robot's vertical axis with a pattern symmetric about the vertical:
+    # the heading moves no path, so a frame after a turn on the spot holds no new evidence
+    # (why localization.frame_evidence weighs it 0). A pure rotation gives no radial velocity.
+    world = World.from_config(paper_cfg)
+    sensor = RadarSensor(world, paper_cfg.radar.model_copy(update={"fidelity": fidelity}))
+    at_rest = np.zeros(2)
+    for x, y in ((1.0, 1.5), (3.2, 2.4), (2.5, 4.1)):
+        frames = [
+            sensor.measure(np.array([x, y, theta]), at_rest, np.random.default_rng(11))
+            for theta in (0.0, 1.3, -2.7)
+        ]
+        assert len(frames[0]) > 0
+        for other in frames[1:]:
+            np.testing.assert_array_equal(other.range_m, frames[0].range_m)
+            np.testing.assert_array_equal(other.velocity_mps, frames[0].velocity_mps)
+            np.testing.assert_array_equal(other.power_dbm, frames[0].power_dbm)
