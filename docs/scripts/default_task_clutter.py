@@ -22,6 +22,7 @@ import numpy as np
 import lrp_gym  # noqa: F401  (registers the ids)
 from agents.pure_pursuit import PurePursuitPolicy
 from lrp_gym.commands._common import overrides
+from lrp_gym.localization.metrics import reliability
 
 WRONG_M = 0.3
 STUCK_FRAMES = 10
@@ -29,18 +30,19 @@ STUCK_FRAMES = 10
 BANDS = (0.0, 0.5, 0.8, 0.9, 0.95, 0.99, 1.0)
 
 
-def reliability_table(confidence: np.ndarray, wrong: np.ndarray) -> str:
-    """Per confidence band: steps, their mean confidence and the share that is wrong."""
+def reliability_table(confidence: np.ndarray, errors_m: np.ndarray) -> str:
+    """Per confidence band (:data:`BANDS`, the bins of :func:`reliability`): steps, their mean
+    confidence and the share off by more than :data:`WRONG_M`."""
     lines = ["confidence band | steps | mean confidence | wrong (> 0.3 m)"]
-    for lo, hi in zip(BANDS[:-1], BANDS[1:], strict=True):
-        sel = (confidence >= lo) & ((confidence < hi) | (hi == BANDS[-1]))
-        if sel.any():
+    for row in reliability(confidence, errors_m, bins=BANDS, wrong_m=WRONG_M):
+        band = f"{row['lo']:.2f}-{row['hi']:.2f}"
+        if row["steps"]:
             lines.append(
-                f"{lo:.2f}-{hi:.2f} | {int(sel.sum())} | {confidence[sel].mean():.3f} | "
-                f"{100 * wrong[sel].mean():.1f} %"
+                f"{band} | {row['steps']} | {row['mean_confidence']:.3f} | "
+                f"{100 * row['wrong_share']:.1f} %"
             )
         else:
-            lines.append(f"{lo:.2f}-{hi:.2f} | 0 | - | -")
+            lines.append(f"{band} | 0 | - | -")
     return "\n".join(lines)
 
 
@@ -59,7 +61,7 @@ def main() -> None:
     env = gym.make(args.env, scenario=args.scenario, task_mode="goal", overrides=over)
     policy = PurePursuitPolicy.from_env(env)
     total_conv = total_wrong = stuck = 0
-    confidences, wrongs = [], []
+    confidences, errors_m = [], []
     for seed in range(first, last + 1):
         policy.reset()
         obs, _ = env.reset(seed=seed)
@@ -69,10 +71,9 @@ def main() -> None:
             obs, _, terminated, truncated, info = env.step(policy.act(obs))
             done = terminated or truncated
             steps += 1
-            off = bool(info["position_error_m"] > WRONG_M)
             confidences.append(float(info["localization_confidence"]))
-            wrongs.append(off)
-            is_wrong = bool(info["converged"]) and off
+            errors_m.append(float(info["position_error_m"]))
+            is_wrong = bool(info["converged"]) and errors_m[-1] > WRONG_M
             conv += bool(info["converged"])
             wrong += is_wrong
             run = run + 1 if is_wrong else 0
@@ -91,7 +92,7 @@ def main() -> None:
         f"({100 * total_wrong / max(total_conv, 1):.1f} %), {stuck} stuck "
         f"(>= {STUCK_FRAMES} wrong converged steps in a row)"
     )
-    print(reliability_table(np.array(confidences), np.array(wrongs)))
+    print(reliability_table(np.array(confidences), np.array(errors_m)))
 
 
 if __name__ == "__main__":

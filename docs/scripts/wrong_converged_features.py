@@ -1,0 +1,71 @@
+"""What the converged-but-wrong steps look like under clutter (docs/trust.md, session 18).
+
+Pure pursuit on the env's default task with unmapped scatterers (``perturbations.clutter``):
+for the converged steps that are right and those off by more than 0.3 m, the 10th, 50th and
+90th percentiles of the step index, the distance driven since the reset, the confidence, the
+particle count and the whole cloud's position std (``info["pose_std"]``, x and y combined).
+
+    PYTHONPATH=$PWD .venv/bin/python docs/scripts/wrong_converged_features.py --seeds 7300-7399 \
+        [--severity 0.5]
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import gymnasium as gym
+import numpy as np
+
+import lrp_gym  # noqa: F401  (registers the ids)
+from agents.pure_pursuit import PurePursuitPolicy
+from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M
+
+FEATURES = ("step", "driven_m", "confidence", "particles", "cloud_std_m")
+
+
+def converged_steps(seeds: range, severity: float) -> tuple[np.ndarray, np.ndarray]:
+    """Features (K, 5) of every converged step, and whether each is wrong (K,)."""
+    over = {"perturbations": {"clutter": {"severity": severity}}} if severity > 0.0 else {}
+    env = gym.make("LRPRadarNavFast-v0", task_mode="goal", overrides=over)
+    policy = PurePursuitPolicy.from_env(env)
+    rows, wrong = [], []
+    for seed in seeds:
+        policy.reset()
+        obs, info = env.reset(seed=seed)
+        last_xy, driven, step, done = np.asarray(info["true_pose"])[:2], 0.0, 0, False
+        while not done:
+            obs, _, terminated, truncated, info = env.step(policy.act(obs))
+            done, step = terminated or truncated, step + 1
+            xy = np.asarray(info["true_pose"])[:2]
+            driven, last_xy = driven + float(np.hypot(*(xy - last_xy))), xy
+            if info["converged"]:
+                std = np.asarray(info["pose_std"])
+                cloud = float(np.hypot(std[0], std[1]))
+                conf = info["localization_confidence"]
+                rows.append((step, driven, conf, info["n_particles"], cloud))
+                wrong.append(info["position_error_m"] > CONFIDENTLY_WRONG_M)
+    env.close()
+    return np.array(rows, float).reshape(-1, len(FEATURES)), np.array(wrong, bool)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", default="7300-7399", help="FIRST-LAST")
+    ap.add_argument("--severity", type=float, default=0.5, help="clutter severity (0: none)")
+    args = ap.parse_args()
+    first, last = (int(s) for s in args.seeds.split("-"))
+    x, wrong = converged_steps(range(first, last + 1), args.severity)
+    print(f"{len(wrong)} converged steps, {int(wrong.sum())} wrong (> {CONFIDENTLY_WRONG_M} m)")
+    print("feature | right: p10 / p50 / p90 | wrong: p10 / p50 / p90")
+    for k, name in enumerate(FEATURES):
+        cells = [
+            " / ".join(f"{v:.3g}" for v in np.percentile(x[sel, k], [10, 50, 90]))
+            if sel.any()
+            else "-"
+            for sel in (~wrong, wrong)
+        ]
+        print(f"{name} | {cells[0]} | {cells[1]}")
+
+
+if __name__ == "__main__":
+    main()
