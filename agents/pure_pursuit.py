@@ -19,7 +19,8 @@ Stable-Baselines3 ``predict`` signature.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Sequence
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -94,6 +95,53 @@ class PurePursuitConfig:
     turn_gain: float = 3.0
     avoid_walls_when_unsure: bool = False
     creep_margin_m: float = 0.05
+
+
+#: The settings a user may give (``lrp-gym evaluate --agent-option KEY=VALUE``): the robot
+#: limits and the frame period come from the env.
+USER_OPTIONS = tuple(
+    f.name
+    for f in fields(PurePursuitConfig)
+    if f.name not in ("max_speed_mps", "max_reverse_mps", "max_turn_rate_rps", "frame_period_s")
+)
+
+
+def parse_options(items: Sequence[str]) -> dict[str, float | bool]:
+    """``KEY=VALUE`` strings as typed :class:`PurePursuitConfig` settings.
+
+    Raises
+    ------
+    ValueError
+        Naming the item: no ``=``, a key that is not in :data:`USER_OPTIONS`, a value that is
+        not a number (a bool: true/false/1/0/yes/no/on/off), or a number that is negative or
+        not finite.
+    """
+    out: dict[str, float | bool] = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        key, text = key.strip(), text.strip()
+        if not sep or not key:
+            raise ValueError(f"expected KEY=VALUE, got {item!r}")
+        if key not in USER_OPTIONS:
+            raise ValueError(
+                f"{item!r}: {key!r} is not a pure pursuit setting; choose from "
+                + ", ".join(USER_OPTIONS)
+            )
+        if isinstance(getattr(PurePursuitConfig, key), bool):
+            flags = {"true": True, "1": True, "yes": True, "on": True}
+            flags |= {"false": False, "0": False, "no": False, "off": False}
+            if text.lower() not in flags:
+                raise ValueError(f"{item!r}: {key} takes true or false, got {text!r}")
+            out[key] = flags[text.lower()]
+            continue
+        try:
+            value = float(text)
+        except ValueError:
+            raise ValueError(f"{item!r}: {key} takes a number, got {text!r}") from None
+        if not (np.isfinite(value) and value >= 0.0):
+            raise ValueError(f"{item!r}: {key} must be a finite number >= 0, got {text!r}")
+        out[key] = value
+    return out
 
 
 def lookahead_point(points: np.ndarray, distance_m: float) -> np.ndarray:

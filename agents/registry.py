@@ -116,11 +116,19 @@ def load_ppo(
 
 
 def make_agent(
-    agent: str, env: gym.Env, model_path: str | Path | None = None, seed: int = 0
+    agent: str,
+    env: gym.Env,
+    model_path: str | Path | None = None,
+    seed: int = 0,
+    options: dict[str, Any] | None = None,
 ) -> Policy:
-    """The policy for an agent name (see :data:`AGENTS`) acting in ``env``."""
+    """The policy for an agent name (see :data:`AGENTS`) acting in ``env``; ``options``, pure
+    pursuit's settings (:func:`agents.pure_pursuit.parse_options`), for pure-pursuit and
+    oracle only."""
+    if options and agent not in ("pure-pursuit", "oracle"):
+        raise ValueError(f"options: agent {agent!r} takes no options")
     if agent in ("pure-pursuit", "oracle"):
-        return PurePursuitPolicy.from_env(env)
+        return PurePursuitPolicy.from_env(env, **(options or {}))
     if agent == "random":
         return RandomPolicy(env.action_space, np.random.default_rng(seed))
     if agent == "ppo":

@@ -97,15 +97,17 @@ def reject_random_agent(agent: str, ray: str | None) -> None:
 
 
 class PolicyFactory:
-    """``agents.registry.make_agent(agent, env, model, seed)`` as a picklable callable of the
-    env: Ray sends it to the workers, which build the policy there."""
+    """``agents.registry.make_agent(agent, env, model, seed, options)`` as a picklable callable
+    of the env: Ray sends it to the workers, which build the policy there."""
 
-    def __init__(self, agent: str, model: Path | None, seed: int) -> None:
+    def __init__(
+        self, agent: str, model: Path | None, seed: int, options: dict[str, Any] | None = None
+    ) -> None:
         # absolute: a worker's folder (or node) is not the driver's
-        self.agent, self.seed = agent, seed
+        self.agent, self.seed, self.options = agent, seed, dict(options or {})
         self.model = None if model is None else Path(model).resolve()
 
     def __call__(self, env: Any) -> Any:
         from agents.registry import make_agent
 
-        return make_agent(self.agent, env, self.model, self.seed)
+        return make_agent(self.agent, env, self.model, self.seed, self.options)

@@ -48,6 +48,32 @@ def agent_option() -> Any:
     )
 
 
+def agent_settings_option() -> Any:
+    """``--agent-option KEY=VALUE`` (shared with robustness)."""
+    return typer.Option(
+        None,
+        "--agent-option",
+        metavar="KEY=VALUE",
+        help="A pure pursuit setting (pure-pursuit and oracle; a field of "
+        "agents.pure_pursuit.PurePursuitConfig), e.g. avoid_walls_when_unsure=true or "
+        "creep_speed_mps=0.2; repeatable.",
+    )
+
+
+def agent_settings(agent: str, items: list[str] | None) -> dict[str, Any]:
+    """``--agent-option`` items as typed settings (checked before any work)."""
+    if not items:
+        return {}
+    if agent not in ("pure-pursuit", "oracle"):
+        raise InputError(f"--agent-option: only for --agent pure-pursuit or oracle, not {agent}")
+    from agents.pure_pursuit import parse_options
+
+    try:
+        return parse_options(items)
+    except ValueError as err:
+        raise InputError(f"--agent-option: {err}") from None
+
+
 def model_option() -> Any:
     """``--model`` (shared with robustness)."""
     return typer.Option(
@@ -113,6 +139,7 @@ def check_agent(agent: str, model: Path | None, task: str | None, episodes: int)
 def evaluate(
     scenario: str = scenario_argument(),
     agent: str = agent_option(),
+    agent_options: list[str] = agent_settings_option(),
     model: Path = model_option(),
     env: str = env_option(),
     task: str = task_option(),
@@ -137,6 +164,7 @@ def evaluate(
     """Evaluate an agent: success, collisions, time to goal, localisation and cross-track
     error."""
     check_agent(agent, model, task, episodes)
+    settings = agent_settings(agent, agent_options)
     check_num_envs(num_envs)
     choice(fidelity, FIDELITIES, "--fidelity")
     out_path = check_output(out, "--out", force, (".json",))
@@ -148,6 +176,7 @@ def evaluate(
         raise InputError("--gif: not with --ray (run the episode to record without it)")
     over = overrides(scenario, sets, fidelity)
     study = dict(command="evaluate", agent=agent, model=model, env=env, task=task, seed=seed)
+    study |= {"agent_options": settings} if settings else {}
     sidecar = check_ray_options(ray, resume, out_path, force, study | {"overrides": over})
     from agents import registry as ev
     from lrp_gym.config import deep_merge
@@ -160,7 +189,7 @@ def evaluate(
             agent, env, scenario, render_mode="rgb_array" if gif else None, overrides=over or None
         )
     with as_flags(model_path="--model", agent="--agent"):
-        policy = ev.make_agent(agent, env_obj, model, seed)
+        policy = ev.make_agent(agent, env_obj, model, seed, settings)
     env_id = env_obj.spec.id if env_obj.spec is not None else env
     cfg = ep.nav_env(env_obj).cfg
     try:
@@ -169,8 +198,9 @@ def evaluate(
                 show = None if json_out else _show
                 run = dict(address=ray, sidecar=sidecar, resume=resume)
                 summary = _on_ray(
-                    agent, model, seed, env, scenario, over, episodes, num_envs, show, run
-                )
+                    PolicyFactory(agent, model, seed, settings), agent, seed, env, scenario,
+                    over, episodes, num_envs, show, run,
+                )  # fmt: skip
             else:
                 summary = ep.run_episodes(
                     policy,
@@ -190,6 +220,7 @@ def evaluate(
         "task": cfg.task.mode,
         "fidelity": cfg.radar.fidelity,
         "sets": list(sets or []),
+        "agent_options": settings,
         "model": str(model or ev.DEFAULT_MODEL) if agent == "ppo" else None,
         **ep.public(summary),
     }
@@ -216,7 +247,7 @@ def evaluate(
             wrote(p, quiet=json_out)
 
 
-def _on_ray(agent, model, seed, env, scenario, over, episodes, num_envs, show, run) -> dict:
+def _on_ray(factory, agent, seed, env, scenario, over, episodes, num_envs, show, run) -> dict:
     """The evaluation as Ray tasks (``run``: address, sidecar, resume); ``show`` each episode."""
     from lrp_gym.experiments.distributed import run_episodes_units
 
@@ -225,7 +256,7 @@ def _on_ray(agent, model, seed, env, scenario, over, episodes, num_envs, show, r
             show(res)
 
     return run_episodes_units(
-        PolicyFactory(agent, model, seed), agent, env, scenario, over, episodes, seed,
+        factory, agent, env, scenario, over, episodes, seed,
         num_envs, on_result=shown, **run,
     )  # fmt: skip
 

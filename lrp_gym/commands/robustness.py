@@ -38,6 +38,8 @@ from lrp_gym.commands._common import (
 )
 from lrp_gym.commands.evaluate import (
     agent_option,
+    agent_settings,
+    agent_settings_option,
     check_agent,
     check_num_envs,
     env_option,
@@ -67,6 +69,7 @@ def _floats(text: str, flag: str) -> list[float]:
 def robustness(
     scenario: str = scenario_argument(),
     agent: str = agent_option(),
+    agent_options: list[str] = agent_settings_option(),
     model: Path = model_option(),
     env: str = env_option(),
     task: str = task_option(),
@@ -104,6 +107,7 @@ def robustness(
     for n in names:
         choice(n, rb.PERTURBATION_NAMES, "--perturbations")
     check_agent(agent, model, task, episodes)
+    settings = agent_settings(agent, agent_options)
     check_num_envs(num_envs)
     with as_flags(
         perturbations="--perturbations", severities="--severities", episodes="--episodes"
@@ -118,14 +122,17 @@ def robustness(
     check_distinct(out_path, plot_path)
     over = overrides(scenario, sets, fidelity)
     study = dict(command="robustness", agent=agent, model=model, env=env, task=task)
+    study |= {"agent_options": settings} if settings else {}
     study |= dict(scenario=scenario, overrides=over, perturbations=names, severities=sev)
     sidecar = check_ray_options(ray, resume, out_path, force, study | {"seed": seed})
     run = None if ray is None else {"address": ray, "sidecar": sidecar, "resume": resume}
     with as_flags(env_id="--env", model_path="--model", agent="--agent", task="--task"):
         result = _run(
-            rb, agent, env, names, sev, episodes, seed, task, model, scenario, json_out, over,
-            num_envs, run,
+            rb, PolicyFactory(agent, model, seed, settings), agent, env, names, sev, episodes,
+            seed, task, scenario, json_out, over, num_envs, run,
         )  # fmt: skip
+    if settings:
+        result["agent_options"] = settings
     if plot_path is not None:
         save_figure(rb.plot_matrix(result), plot_path)
     if out_path is not None:
@@ -142,7 +149,7 @@ def robustness(
 
 
 def _run(
-    rb, agent, env, names, sev, episodes, seed, task, model, scenario, quiet, over, num_envs, run
+    rb, policy, agent, env, names, sev, episodes, seed, task, scenario, quiet, over, num_envs, run
 ) -> dict:
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -157,7 +164,6 @@ def _run(
         transient=quiet,
     ) as bar:
         job = bar.add_task("robustness", total=total)
-        policy = PolicyFactory(agent, model, seed)
         if run is not None:
             from lrp_gym.experiments.distributed import run_matrix_units
 

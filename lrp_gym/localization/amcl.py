@@ -250,7 +250,9 @@ class Amcl:
                 grid = self._grid_loglik = self.grid.log_likelihood(self.lost_model, fingerprint)
                 best = float(np.max(grid))
                 xy = self.particles[:, :2]
-                self.lost.update_marginal(best, marginal, fingerprint.count, grid, xy, w)
+                self.lost.update_marginal(
+                    best, marginal, fingerprint.count, grid, xy, w, self.evidence.independence()
+                )
                 self._pending_global = self.lost.evidence_nats >= self.cfg.lost_restart_nats
         if self._pending_global:
             return self._global_start(fingerprint, rng, speed_mps)

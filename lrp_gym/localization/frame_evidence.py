@@ -58,6 +58,11 @@ class FrameEvidence:
         """Add an odometry step's translation (m; its sign does not matter)."""
         self.moved_m += abs(float(translation_m))
 
+    def independence(self) -> float:
+        """The share of an independent frame that a frame weighed now counts for, without the
+        constant tempering and without starting the distance anew (the lost test's weight)."""
+        return independence_weight(self.moved_m, self.correlation_m)
+
     def restart(self) -> float:
         """:meth:`reset`, then :meth:`take`: the exponent of a new cloud's first frame."""
         self.reset()

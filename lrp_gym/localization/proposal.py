@@ -248,11 +248,21 @@ class LostTest:
         cell_loglik: np.ndarray | None = None,
         cloud_xy: np.ndarray | None = None,
         cloud_weights: np.ndarray | None = None,
+        frame_weight: float = 1.0,
     ) -> None:
         """:meth:`update` from the cloud's :meth:`marginal` (None: no frame to add);
         ``cell_loglik``, the frame's grid likelihood, feeds the :attr:`alternative`, whose
         evidence counts the cells away from the cloud (positions ``cloud_xy`` (N, 2) with
-        ``cloud_weights`` (N,))."""
+        ``cloud_weights`` (N,)).
+
+        ``frame_weight`` in [0, 1] is the share of an independent frame that this one counts
+        for (:meth:`FrameEvidence.independence`). Evidence that the cloud is right (a frame
+        that lowers a statistic) counts only that share, as in the particle weights: a robot
+        standing or turning on the spot sees the same frame again, and a wrong cloud that fits
+        it a little better than the drift would otherwise be read as found by repetition
+        (docs/trust.md, session 19). Evidence that the cloud is lost counts in full: the odometry
+        cannot tell a kidnap at standstill from standing, and a false alarm costs a restart
+        where a missed one leaves the estimate confidently wrong."""
         self.last_best_nats = best_loglik
         evidence = None
         if self.alternative is not None and cell_loglik is not None:
@@ -264,18 +274,25 @@ class LostTest:
             return
         self.last_deficit_nats = best_loglik - marginal
         drift = self.drift_for(n_distances)
-        self.statistic_nats = max(0.0, self.statistic_nats + self.last_deficit_nats - drift)
+        gain = self.last_deficit_nats - drift
+        self.statistic_nats = max(0.0, self.statistic_nats + _weighed(gain, frame_weight))
         if evidence is not None and evidence > -np.inf:
             drift = max(
                 self.alternative_drift_nats, self.alternative_drift_per_distance_nats * n_distances
             )
-            gain = evidence - marginal - drift
+            gain = _weighed(evidence - marginal - drift, frame_weight)
             self.alternative_nats = max(0.0, self.alternative_nats + gain)
 
     @property
     def p_lost(self) -> float:
         """Probability that the cloud has lost the robot, from the statistic (logistic)."""
         return float(1.0 / (1.0 + np.exp(self.threshold_nats - self.evidence_nats)))
+
+
+def _weighed(gain_nats: float, frame_weight: float) -> float:
+    """A statistic's step: a fall (evidence for the cloud) scaled by ``frame_weight``, a rise
+    in full (see :meth:`LostTest.update_marginal`)."""
+    return gain_nats if gain_nats >= 0.0 else frame_weight * gain_nats
 
 
 # One copy per model and clutter probability: the grids cache their work per model object.

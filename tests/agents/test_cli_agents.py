@@ -30,6 +30,17 @@ def run_cli(capsys, *args: str) -> tuple[int, str, str]:
         (["evaluate", "--task", "maze", "--episodes", "1"], "--task"),
         (["train", "--config", "/nonexistent/ppo.yaml"], "--config"),
         (["demo", "--steps", "0"], "--steps"),
+        (["evaluate", "--agent-option", "no_such_gain=1", "--episodes", "1"], "--agent-option"),
+        (["evaluate", "--agent-option", "creep_speed_mps", "--episodes", "1"], "--agent-option"),
+        (["evaluate", "--agent-option", "creep_speed_mps=-1", "--episodes", "1"], "--agent-option"),
+        (
+            ["evaluate", "--agent", "random", "--agent-option", "turn_gain=2", "--episodes", "1"],
+            "--agent-option",
+        ),
+        (
+            ["robustness", "--agent-option", "avoid_walls_when_unsure=perhaps", "--episodes", "1"],
+            "--agent-option",
+        ),
     ],
 )
 def test_bad_input_exits_2_with_message(capsys, args, flag):
@@ -120,3 +131,23 @@ def test_demo_writes_plot_and_consistent_summary(capsys, tmp_path):
     assert s["mean_loc_error_m"] == pytest.approx(err.mean(), abs=1e-9)
     assert s["waypoints_m"][0] == [0.75, 0.75] and len(s["waypoints_m"]) == 15
     assert "true x" in out
+
+
+def test_agent_options_reach_the_policy_and_the_record(capsys):
+    """``--agent-option`` sets pure pursuit's config (typed), and the JSON records it; a
+    creep speed of 0 (a robot that starts unlocalised stands instead of creeping) changes
+    the episode."""
+    from agents.pure_pursuit import parse_options
+
+    assert parse_options(["avoid_walls_when_unsure=ON", "creep_speed_mps=0.2"]) == {
+        "avoid_walls_when_unsure": True,
+        "creep_speed_mps": 0.2,
+    }
+    common = ("evaluate", "--env", "LRPRadarNavFast-v0", "--task", "goal", "--episodes", "1")
+    code, out, _ = run_cli(capsys, *common, "--agent-option", "creep_speed_mps=0", "--json")
+    assert code == 0
+    doc = json.loads(out)
+    assert doc["agent_options"] == {"creep_speed_mps": 0.0}
+    code, out, _ = run_cli(capsys, *common, "--json")
+    assert json.loads(out)["agent_options"] == {}
+    assert json.loads(out)["per_episode"][0] != doc["per_episode"][0]

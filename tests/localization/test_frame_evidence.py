@@ -66,3 +66,48 @@ def test_standing_frames_leave_the_weights_as_the_first_left_them(correlation_m)
     else:
         assert spread[-1] > 0.9 * spread[0], spread  # no sharper than after the first
     assert np.hypot(*(first.pose[:2] - pose[:2])) < 0.2
+
+
+@pytest.mark.parametrize("correlation_m", [0.03, None])
+def test_standing_frames_do_not_make_a_wrong_cloud_look_found(correlation_m):
+    # A cloud 1.5 m from where the frames are taken. The robot then turns on the spot: the
+    # same frame again. It may still raise the lost test's statistics (a kidnap at standstill
+    # looks like standing to the odometry) but never lower them: repeated, a wrong cloud's
+    # fit a little better than the drift used to decay p_lost, and a robot turning on the
+    # spot under clutter read a wrong cloud as found (docs/trust.md, session 19).
+    cfg = load_scenario("ipin2023")
+    loc = cfg.localization.model_copy(update={"likelihood_correlation_m": correlation_m})
+    world = World.from_config(cfg)
+    pose = np.array([2.0, 3.0, 0.3])
+    fp = Fingerprint.from_true(world.layout, world.radar_position(pose[:2] + [1.5, 0.0]))
+    amcl = Amcl(world, loc)
+    amcl.reset(np.random.default_rng(0), pose=pose)
+    amcl.update(np.zeros(3), fp, np.random.default_rng(1))
+    amcl.update(np.zeros(3), fp, np.random.default_rng(2))
+    amcl.update(np.zeros(3), fp, np.random.default_rng(3))  # the statistics have risen
+    peak = amcl.lost.evidence_nats
+    assert peak > 1.0
+    # the same frame after the cloud has moved onto the truth: the deficit is now negative
+    amcl.particles[:, :2] += [1.5, 0.0]
+    trace = []
+    for k in range(4):
+        amcl.update(np.zeros(3), fp, np.random.default_rng(4 + k))
+        trace.append(amcl.lost.evidence_nats)
+    if correlation_m is None:  # every frame counted anew: found by repetition
+        assert trace[-1] < peak - 1.0, (peak, trace)
+    else:
+        assert trace == [peak] * 4, (peak, trace)
+
+
+def test_a_frame_that_repeats_the_last_counts_only_against_the_cloud():
+    from lrp_gym.localization.proposal import LostTest
+
+    test = LostTest(drift_nats=4.0, threshold_nats=8.0)
+    test.update_marginal(20.0, 10.0, 5)  # deficit 10, drift 4
+    assert test.statistic_nats == 6.0
+    test.update_marginal(11.0, 10.0, 5, frame_weight=0.0)  # 1 - 4 < 0: repeated, ignored
+    assert test.statistic_nats == 6.0
+    test.update_marginal(11.0, 10.0, 5, frame_weight=0.5)
+    assert test.statistic_nats == 4.5
+    test.update_marginal(16.0, 10.0, 5, frame_weight=0.0)  # against the cloud: in full
+    assert test.statistic_nats == 6.5
