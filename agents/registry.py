@@ -16,6 +16,8 @@ from lrp_gym.experiments.episodes import Policy
 from lrp_gym.localization.metrics import LOCALISED_M
 
 AGENTS = ("pure-pursuit", "ppo", "random", "oracle")
+#: The agents that take pure pursuit's settings (``options`` of :func:`make_agent`).
+CONFIGURABLE_AGENTS = ("pure-pursuit", "oracle")
 MODELS_DIR = Path(__file__).resolve().parent / "models"
 DEFAULT_MODEL = MODELS_DIR / "ppo_lrp_nav.zip"
 
@@ -125,9 +127,9 @@ def make_agent(
     """The policy for an agent name (see :data:`AGENTS`) acting in ``env``; ``options``, pure
     pursuit's settings (:func:`agents.pure_pursuit.parse_options`), for pure-pursuit and
     oracle only."""
-    if options and agent not in ("pure-pursuit", "oracle"):
+    if options and agent not in CONFIGURABLE_AGENTS:
         raise ValueError(f"options: agent {agent!r} takes no options")
-    if agent in ("pure-pursuit", "oracle"):
+    if agent in CONFIGURABLE_AGENTS:
         return PurePursuitPolicy.from_env(env, **(options or {}))
     if agent == "random":
         return RandomPolicy(env.action_space, np.random.default_rng(seed))

@@ -13,11 +13,9 @@ from __future__ import annotations
 
 import argparse
 
-import gymnasium as gym
 import numpy as np
+from wrong_converged_features import default_task_steps  # the script beside this one
 
-import lrp_gym  # noqa: F401  (registers the ids)
-from agents.pure_pursuit import PurePursuitPolicy
 from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M
 
 #: A minority mode: at least this many particles at least ``FAR_M`` from the estimate.
@@ -29,28 +27,17 @@ BANDS = ((0.9, 0.95), (0.95, 0.99), (0.99, 1.0))
 def converged_steps(seeds: range, severity: float) -> np.ndarray:
     """One row per converged step: wrong, confidence, truth's mass, particles near the
     truth, particles, particles far from the estimate."""
-    over = {"perturbations": {"clutter": {"severity": severity}}} if severity > 0.0 else {}
-    env = gym.make("LRPRadarNavFast-v0", task_mode="goal", overrides=over)
-    policy = PurePursuitPolicy.from_env(env)
-    amcl = env.unwrapped.core.stacks[0].localizer
     rows = []
-    for seed in seeds:
-        policy.reset()
-        obs, info = env.reset(seed=seed)
-        done = False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(policy.act(obs))
-            done = terminated or truncated
-            if not info["converged"]:
-                continue
-            xy = amcl.particles[:, :2]
-            w = amcl.weights / np.sum(amcl.weights)
-            near = np.hypot(*(xy - np.asarray(info["true_pose"])[:2]).T) < CONFIDENTLY_WRONG_M
-            far = np.hypot(*(xy - np.asarray(info["est_pose"])[:2]).T) >= FAR_M
-            wrong = info["position_error_m"] > CONFIDENTLY_WRONG_M
-            conf = info["localization_confidence"]
-            rows.append((wrong, conf, w[near].sum(), near.sum(), len(w), far.sum()))
-    env.close()
+    for step, info, amcl in default_task_steps(seeds, severity):
+        if step == 0 or not info["converged"]:
+            continue
+        xy = amcl.particles[:, :2]
+        w = amcl.weights / np.sum(amcl.weights)
+        near = np.hypot(*(xy - np.asarray(info["true_pose"])[:2]).T) < CONFIDENTLY_WRONG_M
+        far = np.hypot(*(xy - np.asarray(info["est_pose"])[:2]).T) >= FAR_M
+        wrong = info["position_error_m"] > CONFIDENTLY_WRONG_M
+        conf = info["localization_confidence"]
+        rows.append((wrong, conf, w[near].sum(), near.sum(), len(w), far.sum()))
     return np.array(rows, float).reshape(-1, 6)
 
 

@@ -12,6 +12,8 @@ particle count and the whole cloud's position std (``info["pose_std"]``, x and y
 from __future__ import annotations
 
 import argparse
+from collections.abc import Iterator
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -23,28 +25,43 @@ from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M
 FEATURES = ("step", "driven_m", "confidence", "particles", "cloud_std_m")
 
 
-def converged_steps(seeds: range, severity: float) -> tuple[np.ndarray, np.ndarray]:
-    """Features (K, 5) of every converged step, and whether each is wrong (K,)."""
+def default_task_steps(seeds: range, severity: float) -> Iterator[tuple[int, dict, Any]]:
+    """Pure pursuit on the default task under clutter ``severity`` (0: none): for the reset
+    (step 0) and every step of every seed, the step's index, its info and the localiser (its
+    particles as they are after the step)."""
     over = {"perturbations": {"clutter": {"severity": severity}}} if severity > 0.0 else {}
     env = gym.make("LRPRadarNavFast-v0", task_mode="goal", overrides=over)
     policy = PurePursuitPolicy.from_env(env)
+    localizer = env.unwrapped.core.stacks[0].localizer
+    try:
+        for seed in seeds:
+            policy.reset()
+            obs, info = env.reset(seed=seed)
+            step, done = 0, False
+            yield step, info, localizer
+            while not done:
+                obs, _, terminated, truncated, info = env.step(policy.act(obs))
+                done, step = terminated or truncated, step + 1
+                yield step, info, localizer
+    finally:
+        env.close()
+
+
+def converged_steps(seeds: range, severity: float) -> tuple[np.ndarray, np.ndarray]:
+    """Features (K, 5) of every converged step, and whether each is wrong (K,)."""
     rows, wrong = [], []
-    for seed in seeds:
-        policy.reset()
-        obs, info = env.reset(seed=seed)
-        last_xy, driven, step, done = np.asarray(info["true_pose"])[:2], 0.0, 0, False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(policy.act(obs))
-            done, step = terminated or truncated, step + 1
-            xy = np.asarray(info["true_pose"])[:2]
-            driven, last_xy = driven + float(np.hypot(*(xy - last_xy))), xy
-            if info["converged"]:
-                std = np.asarray(info["pose_std"])
-                cloud = float(np.hypot(std[0], std[1]))
-                conf = info["localization_confidence"]
-                rows.append((step, driven, conf, info["n_particles"], cloud))
-                wrong.append(info["position_error_m"] > CONFIDENTLY_WRONG_M)
-    env.close()
+    for step, info, _ in default_task_steps(seeds, severity):
+        xy = np.asarray(info["true_pose"])[:2]
+        if step == 0:  # the reset
+            driven, last_xy = 0.0, xy
+            continue
+        driven, last_xy = driven + float(np.hypot(*(xy - last_xy))), xy
+        if info["converged"]:
+            std = np.asarray(info["pose_std"])
+            cloud = float(np.hypot(std[0], std[1]))
+            conf = info["localization_confidence"]
+            rows.append((step, driven, conf, info["n_particles"], cloud))
+            wrong.append(info["position_error_m"] > CONFIDENTLY_WRONG_M)
     return np.array(rows, float).reshape(-1, len(FEATURES)), np.array(wrong, bool)
 
 

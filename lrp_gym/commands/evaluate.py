@@ -64,9 +64,12 @@ def agent_settings(agent: str, items: list[str] | None) -> dict[str, Any]:
     """``--agent-option`` items as typed settings (checked before any work)."""
     if not items:
         return {}
-    if agent not in ("pure-pursuit", "oracle"):
-        raise InputError(f"--agent-option: only for --agent pure-pursuit or oracle, not {agent}")
     from agents.pure_pursuit import parse_options
+    from agents.registry import CONFIGURABLE_AGENTS
+
+    if agent not in CONFIGURABLE_AGENTS:
+        names = " or ".join(CONFIGURABLE_AGENTS)
+        raise InputError(f"--agent-option: only for --agent {names}, not {agent}")
 
     try:
         return parse_options(items)
