@@ -25,11 +25,16 @@ from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M
 FEATURES = ("step", "driven_m", "confidence", "particles", "cloud_std_m")
 
 
-def default_task_steps(seeds: range, severity: float) -> Iterator[tuple[int, dict, Any]]:
-    """Pure pursuit on the default task under clutter ``severity`` (0: none): for the reset
-    (step 0) and every step of every seed, the step's index, its info and the localiser (its
-    particles as they are after the step)."""
-    over = {"perturbations": {"clutter": {"severity": severity}}} if severity > 0.0 else {}
+def default_task_steps(
+    seeds: range, severity: float, overrides: dict | None = None
+) -> Iterator[tuple[int, dict, Any]]:
+    """Pure pursuit on the default task under clutter ``severity`` (0: none), with the
+    scenario ``overrides`` (e.g. a room with obstacles): for the reset (step 0) and every
+    step of every seed, the step's index, its info and the localiser (its particles as they
+    are after the step)."""
+    over = dict(overrides or {})
+    if severity > 0.0:
+        over["perturbations"] = {"clutter": {"severity": severity}}
     env = gym.make("LRPRadarNavFast-v0", task_mode="goal", overrides=over)
     policy = PurePursuitPolicy.from_env(env)
     localizer = env.unwrapped.core.stacks[0].localizer

@@ -255,6 +255,13 @@ class LocalizationConfig(Strict):
         "the radar delivers a visible trihedral in about 95 % of frames, 84 % among strong "
         "scatterers); 0 leaves the term out",
     )
+    reflector_visibility: bool = Field(
+        default=True,
+        description="weigh each reflector by the radar's probability of detecting it from the "
+        "particle's position (obstacles on the line of sight, pattern cutoff, range, SNR from "
+        "the link budget): a hidden reflector explains no distance and its silence costs "
+        "nothing; rooms where every reflector is detected everywhere are unaffected",
+    )
     global_proposal: bool = Field(
         default=True,
         description="draw the global start and recovery particles from a map-wide grid of the "

@@ -27,7 +27,7 @@ import numpy as np
 
 from lrp_gym.config import LocalizationConfig
 from lrp_gym.localization.frame_evidence import FrameEvidence
-from lrp_gym.localization.kld import KldBinner, clamped_particle_count
+from lrp_gym.localization.kld import KldBinner, augmented_particle_count
 from lrp_gym.localization.likelihood import FingerprintModel, frame_fit
 from lrp_gym.localization.particle_motion import (
     odometry_noise,
@@ -44,6 +44,7 @@ from lrp_gym.localization.resampling import (
     systematic_resample,
 )
 from lrp_gym.localization.slip import slip_monitor
+from lrp_gym.localization.visibility import RadarLink
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
 
@@ -62,6 +63,8 @@ class Amcl:
         Room (free space), reflector layout, radar height and maximum range, robot radius.
     cfg : LocalizationConfig
         Particle counts, noise, likelihood, KLD, recovery and estimator settings.
+    link : RadarLink, optional
+        The radar's link budget: the model predicts each reflector's detection from its SNR.
 
     Attributes
     ----------
@@ -71,10 +74,12 @@ class Amcl:
         Their normalised weights.
     """
 
-    def __init__(self, world: World, cfg: LocalizationConfig) -> None:
+    def __init__(
+        self, world: World, cfg: LocalizationConfig, link: RadarLink | None = None
+    ) -> None:
         self.world = world
         self.cfg = cfg
-        self.model = FingerprintModel.for_world(world, cfg)  # the stack may swap it (suspects)
+        self.model = FingerprintModel.for_world(world, cfg, link)  # the stack may swap it
         self.motion_noise = odometry_noise(cfg)
         self.slip = slip_monitor(self.motion_noise, cfg)
         self.clearance_m = float(world.robot.radius_m)
@@ -367,17 +372,7 @@ class Amcl:
         n = len(self.weights)
         idx = systematic_resample(self.weights, n, rng)
         self.last_k_bins = self.binner.count(self.particles, idx)
-        n_new = clamped_particle_count(self.cfg, self.last_k_bins)
-        if self.p_random > 0.0:
-            # Fox's incremental KLD draws from the augmented mixture, so the random particles
-            # (almost each in a bin of its own) raise k too: n = n_chi(k + p_random n).
-            for _ in range(32):
-                n_next = clamped_particle_count(
-                    self.cfg, self.last_k_bins + int(self.p_random * n_new)
-                )
-                if n_next <= n_new:
-                    break
-                n_new = n_next
+        n_new = augmented_particle_count(self.cfg, self.last_k_bins, self.p_random)
         new_weights = np.full(n_new, 1.0 / n_new)
         if self.cfg.mode_min_particles > 0:
             labels, _ = cluster_labels(

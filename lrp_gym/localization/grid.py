@@ -45,6 +45,7 @@ from lrp_gym.localization.particle_statistics import (
     clusters,
 )
 from lrp_gym.localization.pose_estimate import PoseEstimate
+from lrp_gym.localization.visibility import RadarLink
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
 
@@ -82,10 +83,13 @@ class GridFilter:
     #: are NaN, so a model that starts reading them fails loudly instead of silently).
     heading_dependent_likelihood: ClassVar[bool] = False
 
-    def __init__(self, world: World, cfg: LocalizationConfig) -> None:
+    def __init__(
+        self, world: World, cfg: LocalizationConfig, link: RadarLink | None = None
+    ) -> None:
         self.world = world
         self.cfg = cfg
-        self.model = FingerprintModel.for_world(world, cfg)
+        self.link = link
+        self.model = FingerprintModel.for_world(world, cfg, link)
         self.motion_noise = odometry_noise(cfg)
         self.clearance_m = float(world.robot.radius_m)
         self._size_xy = np.asarray(world.room.size_m[:2], dtype=float)
@@ -122,7 +126,7 @@ class GridFilter:
 
     def spawn(self) -> GridFilter:
         """Another robot's filter (the grid filter is offline: a fresh one, nothing shared)."""
-        return GridFilter(self.world, self.cfg)
+        return GridFilter(self.world, self.cfg, self.link)
 
     # ------------------------------------------------------------------ prior
     def reset(self, rng: np.random.Generator | None = None, pose: np.ndarray | None = None) -> None:

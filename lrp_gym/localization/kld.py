@@ -78,3 +78,18 @@ def clamped_particle_count(cfg: LocalizationConfig, k_bins: int) -> int:
     ``[cfg.min_particles, cfg.max_particles]``."""
     n = kld_particle_count(k_bins, cfg.kld_error, cfg.kld_quantile)
     return min(max(n, cfg.min_particles), cfg.max_particles)
+
+
+def augmented_particle_count(cfg: LocalizationConfig, k_bins: int, p_random: float) -> int:
+    """:func:`clamped_particle_count` for a cloud into which a share ``p_random`` of random
+    particles is injected. Fox's incremental KLD draws from the augmented mixture, so the
+    random particles (almost each in a bin of its own) raise ``k`` too:
+    ``n = n_chi(k + p_random n)``, solved by fixed-point iteration."""
+    n = clamped_particle_count(cfg, k_bins)
+    if p_random > 0.0:
+        for _ in range(32):
+            n_next = clamped_particle_count(cfg, k_bins + int(p_random * n))
+            if n_next <= n:
+                break
+            n = n_next
+    return n

@@ -50,7 +50,12 @@ import numpy as np
 
 from lrp_gym.localization import likelihood_terms as terms
 from lrp_gym.localization.map_returns import MapReturns
-from lrp_gym.localization.sorting import sort_rows_inplace, sort_rows_paired_inplace
+from lrp_gym.localization.reflector_ranges import ReflectorRanges
+from lrp_gym.localization.visibility import (
+    RadarLink,
+    ReflectorVisibility,
+    VisibilityMap,
+)
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.room import Room
@@ -118,6 +123,12 @@ class FingerprintModel:
     use_numba : bool
         Evaluate the map-return density with the numba kernel of
         :mod:`lrp_gym.localization._map_kernel` when numba is installed (else numpy).
+    visibility : VisibilityMap or ReflectorVisibility, optional
+        How likely the radar is to detect each reflector from a position (obstacles,
+        pattern, range, SNR). A reflector's silence costs ``log(1 - P_D p_j)`` with ``p_j``
+        that probability; a hidden one (``p_j`` below 0.01) has the expected range
+        :data:`~lrp_gym.localization.visibility.HIDDEN_RANGE_M` (it sorts last) and explains
+        no distance. None: every reflector is detected with ``P_D`` everywhere.
     """
 
     def __init__(
@@ -135,8 +146,10 @@ class FingerprintModel:
         detection_probability: float = 0.0,
         ghost_probability: float = 0.0,
         use_numba: bool = True,
+        visibility: ReflectorVisibility | VisibilityMap | None = None,
     ) -> None:
         self.use_numba = use_numba
+        self.visibility = visibility
         self.room = room
         self.detection_probability = float(detection_probability)
         self.doppler_std_mps = float(doppler_std_mps)
@@ -152,21 +165,20 @@ class FingerprintModel:
             )
         self.ghosts = None if self.map_returns is None else self.map_returns.ghosts
         self.type_names = layout.type_names
-        self._xy = []
-        self._dz2 = []
-        for t in range(len(layout.types)):
-            sel = layout.type_index == t
-            self._xy.append(layout.positions_m[sel, :2].copy())
-            self._dz2.append((layout.positions_m[sel, 2] - mount_height_m) ** 2)
-        self.counts = tuple(len(x) for x in self._xy)
+        #: The reflectors' ranges from positions, and which ones each position sees.
+        self.reflectors = ReflectorRanges(layout, mount_height_m, visibility)
+        self.counts = self.reflectors.counts
         self.measurement_var_m2 = float(measurement_std_m) ** 2
         self.clutter_probability = float(clutter_probability)
         self.clutter_density = 1.0 / float(max_range_m)
 
     @classmethod
-    def for_world(cls, world: World, cfg: LocalizationConfig) -> FingerprintModel:
+    def for_world(
+        cls, world: World, cfg: LocalizationConfig, link: RadarLink | None = None
+    ) -> FingerprintModel:
         """The localisers' model of ``world``: its layout, radar height and range, and room
-        structure, with the measurement, clutter and structure settings of ``cfg``."""
+        structure, with the measurement, clutter and structure settings of ``cfg``; with the
+        radar's ``link`` budget, each reflector's detection probability from its SNR."""
         return cls(
             world.layout,
             world.mount_height_m,
@@ -180,7 +192,15 @@ class FingerprintModel:
             max_velocity_mps=world.fmcw.max_velocity_mps,
             detection_probability=cfg.detection_probability,
             ghost_probability=cfg.ghost_probability,
+            visibility=(
+                ReflectorVisibility.for_world(world, link) if cfg.reflector_visibility else None
+            ),
         )
+
+    @property
+    def link(self) -> RadarLink | None:
+        """The radar link budget behind the detection probabilities, if any."""
+        return None if self.visibility is None else self.visibility.link
 
     @property
     def clean_probability(self) -> float:
@@ -207,47 +227,11 @@ class FingerprintModel:
             self.doppler_std_mps, self.doppler_outlier_probability, self.velocity_density
         )
 
-    def expected(self, xy: np.ndarray, dtype=np.float64) -> list[np.ndarray]:
-        """Sorted expected distances per type for positions (N, 2): list of (m_t, N) arrays.
-
-        Reflector-major layout: each row is contiguous, so the sorting network and the
-        per-distance arithmetic work on whole rows with few numpy calls.
-        """
-        x = xy[:, 0].astype(dtype)
-        y = xy[:, 1].astype(dtype)
-        out = []
-        for rxy, dz2 in zip(self._xy, self._dz2, strict=True):
-            dx = x - rxy[:, 0:1].astype(dtype)
-            dx *= dx
-            dy = y - rxy[:, 1:2].astype(dtype)
-            dy *= dy
-            dx += dy
-            dx += dz2[:, None].astype(dtype)
-            out.append(sort_rows_inplace(np.sqrt(dx, out=dx)))
-        return out
-
-    def expected_with_velocity(
-        self, xy: np.ndarray, velocity_xy: np.ndarray, dtype=np.float32
-    ) -> tuple[list[np.ndarray], list[np.ndarray]]:
-        """Sorted expected distances and, alongside, radial velocities per type.
-
-        ``velocity_xy`` (N, 2) is each position's velocity over the floor; the radial velocity
-        of a reflector is positive when its distance grows. Lists of (m_t, N) arrays.
-        """
-        x = xy[:, 0].astype(dtype)
-        y = xy[:, 1].astype(dtype)
-        vx = velocity_xy[:, 0].astype(dtype)
-        vy = velocity_xy[:, 1].astype(dtype)
-        ranges, rates = [], []
-        for rxy, dz2 in zip(self._xy, self._dz2, strict=True):
-            dx = rxy[:, 0:1].astype(dtype) - x
-            dy = rxy[:, 1:2].astype(dtype) - y
-            d = np.sqrt(dx * dx + dy * dy + dz2[:, None].astype(dtype))
-            rate = -(vx * dx + vy * dy) / d
-            sort_rows_paired_inplace(d, rate)
-            ranges.append(d)
-            rates.append(rate)
-        return ranges, rates
+    def expected(
+        self, xy: np.ndarray, dtype=np.float64, p_detect: np.ndarray | None = None
+    ) -> list[np.ndarray]:
+        """:meth:`ReflectorRanges.expected`: sorted expected distances per type."""
+        return self.reflectors.expected(xy, dtype, p_detect)
 
     def map_return_ranges(self, xy: np.ndarray, dtype=np.float32) -> np.ndarray | None:
         """Ranges (K, N) of the map-predicted non-reflector returns at positions (N, 2), to

@@ -108,20 +108,33 @@ class _Frame:
         # Per type index: each reflector's best kernel against its own type's distances.
         self.matched: dict[int, np.ndarray] = {}
         self.extra = self.extra_v = None
+        self._p_detect: np.ndarray | None = None
         if map_returns is not None:  # (ranges, rates), rates given iff velocity_xy is
             self.extra = map_returns[0].astype(dtype, copy=False)
             if map_returns[1] is not None:
                 self.extra_v = map_returns[1].astype(dtype, copy=False)
 
+    def p_detect(self) -> np.ndarray:
+        """The radar's detection probability of each reflector (M, N), layout order (needs
+        the model's ``visibility``)."""
+        if self._p_detect is None:
+            self._p_detect = self.model.reflectors.detection_probabilities(self.xy)
+        return self._p_detect
+
     def expected_of(self, t: int) -> tuple[np.ndarray, np.ndarray | None]:
         if self.expected is None:
             if self.velocity_xy is not None:
-                self.expected, self.expected_v = self.model.expected_with_velocity(
-                    self.xy, self.velocity_xy, self.dtype
+                self.expected, self.expected_v = self.model.reflectors.expected_with_velocity(
+                    self.xy, self.velocity_xy, self.dtype, self._visible_p()
                 )
             else:
-                self.expected = self.model.expected(self.xy, self.dtype)
+                self.expected = self.model.reflectors.expected(
+                    self.xy, self.dtype, self._visible_p()
+                )
         return self.expected[t], None if self.expected_v is None else self.expected_v[t]
+
+    def _visible_p(self) -> np.ndarray | None:
+        return None if self.model.visibility is None else self.p_detect()
 
     def map_returns(self) -> tuple[np.ndarray, np.ndarray | None]:
         if self.extra is None:
@@ -151,7 +164,10 @@ def log_likelihood_terms(
     for seg in segments:
         out += _segment_term(frame, seg)
     if model.detection_probability > 0.0 and model.clutter_probability > 0.0:
-        out += _missed_term(frame, segments)
+        if model.visibility is None:
+            out += _missed_term(frame, segments)
+        else:
+            out += _missed_term_per_reflector(frame, segments)
     return out
 
 
@@ -172,38 +188,30 @@ def _segment_term(frame: _Frame, seg: Segment) -> np.ndarray:
     r = e[None, :, :] - seg.z.astype(dtype)[:, None, None]  # (n, m, N)
     r *= r
     r *= half_inv[:, :, None]
-    log_sorted = None
-    if n == m:  # diagonal = sorted-to-sorted assignment (e and z both ascending)
-        diag = r[np.arange(n), np.arange(n)]
-        diag += ln_scale
-        if dens_v is not None:
-            diag += np.log(dens_v[np.arange(n), np.arange(n)])
-        log_sorted = diag.sum(axis=0, dtype=np.float64)
+    # Reflectors each position sees (hidden ones sort last); None: all m everywhere.
+    m_seen = model.reflectors.visible_counts(e)
+    log_sorted = _sorted_assignment(r, m, m_seen, ln_scale, dens_v)
+    counts_match = None if m_seen is None else m_seen == n
     if c == 0.0:
-        if log_sorted is not None:
+        if log_sorted is not None and counts_match is None:
             return log_sorted
         # No clutter floor: the mixture in the log domain.
-        mix = np.logaddexp.reduce(r, axis=1) + ln_scale - dtype(np.log(m))
-        return mix.sum(axis=0, dtype=np.float64)
+        seen = m if m_seen is None else np.maximum(m_seen, 1)
+        mix = np.logaddexp.reduce(r, axis=1) + ln_scale - np.log(seen).astype(dtype)
+        mix = mix.sum(axis=0, dtype=np.float64)
+        return mix if log_sorted is None else np.where(counts_match, log_sorted, mix)
     np.exp(r, out=r)
-    if model.detection_probability > 0.0:  # each reflector's best match, for _missed_term
+    if model.detection_probability > 0.0 and model.visibility is None:  # for _missed_term
         frame.matched[seg.type_index] = r.max(axis=0)
     if dens_v is not None:
         r *= dens_v
-    g = r.mean(axis=1)  # (n, N)
+    if m_seen is None:
+        g = r.mean(axis=1)  # (n, N)
+    else:  # a hidden reflector's kernel is 0: the mean over the seen ones
+        g = r.sum(axis=1)
+        g /= np.maximum(m_seen, 1).astype(dtype)
     if model.map_returns is not None:
-        extra, extra_v = frame.map_returns()
-        g *= dtype(1.0 - model.map_returns.probability)
-        g += map_return_density(
-            seg.z,
-            half_inv[:, 0],
-            extra,
-            model.map_returns.weights,
-            seg.v,
-            extra_v,
-            model.doppler_coefficients(),
-            model.use_numba,
-        )
+        _add_map_returns(frame, seg, g, half_inv[:, 0])
     clutter = model.clutter_density_for(
         dens_v is not None, frame.speed_mps, seg.v if dens_v is not None else None
     )
@@ -213,7 +221,42 @@ def _segment_term(frame: _Frame, seg: Segment) -> np.ndarray:
     # All n distances are reflectors with probability (1 - c)^n: sorted assignment;
     # otherwise at least one is clutter (and one reflector missed): the mixture.
     p_clean = model.clean_probability**n
-    return np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
+    both = np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
+    return both if counts_match is None else np.where(counts_match, both, log_mix)
+
+
+def _sorted_assignment(
+    r: np.ndarray, m: int, m_seen: np.ndarray | None, ln_scale: np.ndarray, dens_v
+) -> np.ndarray | None:
+    """Log-likelihood (N,) of the sorted-to-sorted assignment (e and z both ascending: the
+    diagonal of ``r`` (n, m, N)) of the n measured distances to the n nearest reflectors;
+    None where it cannot apply (n != m, or with hidden reflectors n > m). With hidden
+    reflectors it holds only where exactly n are seen (the caller masks the rest)."""
+    n = r.shape[0]
+    if not (n == m or (m_seen is not None and n < m)):
+        return None
+    diag = r[np.arange(n), np.arange(n)]
+    diag += ln_scale
+    if dens_v is not None:
+        diag += np.log(dens_v[np.arange(n), np.arange(n)])
+    return diag.sum(axis=0, dtype=np.float64)
+
+
+def _add_map_returns(frame: _Frame, seg: Segment, g: np.ndarray, half_inv: np.ndarray) -> None:
+    """Mix the map's predicted returns into the reflector densities ``g`` (n, N), in place."""
+    model = frame.model
+    extra, extra_v = frame.map_returns()
+    g *= frame.dtype(1.0 - model.map_returns.probability)
+    g += map_return_density(
+        seg.z,
+        half_inv,
+        extra,
+        model.map_returns.weights,
+        seg.v,
+        extra_v,
+        model.doppler_coefficients(),
+        model.use_numba,
+    )
 
 
 def _missed_term(frame: _Frame, segments: list[Segment]) -> np.ndarray:
@@ -248,6 +291,32 @@ def _missed_term(frame: _Frame, segments: list[Segment]) -> np.ndarray:
         matched *= p_d
         matched += dtype(1.0) - p_d
         out += np.log(matched).sum(axis=0, dtype=np.float64)
+    return out
+
+
+def _missed_term_per_reflector(frame: _Frame, segments: list[Segment]) -> np.ndarray:
+    """:func:`_missed_term` with each reflector's own detection probability at each
+    position, ``P_D p_j`` (``p_j`` from the model's ``visibility``: 0 for a hidden reflector,
+    whose silence then costs nothing). The best matches are taken over the reflectors in
+    layout order, as the probabilities are."""
+    model, dtype = frame.model, frame.dtype
+    out = np.zeros(frame.xy.shape[0])
+    p = frame.p_detect().astype(dtype) * dtype(model.detection_probability)  # (M, N)
+    ranges = model.reflectors.ranges(frame.xy, dtype)
+    for t, count in enumerate(model.counts):
+        if count == 0:
+            continue
+        p_t = p[model.reflectors.type_rows[t]]  # (m, N)
+        best = np.zeros_like(p_t)
+        for seg in segments:
+            r = ranges[t][None, :, :] - seg.z.astype(dtype)[:, None, None]
+            r *= r
+            r *= (-0.5 / seg.s2).astype(dtype)[:, None, None]
+            np.maximum(best, np.exp(r.max(axis=0)), out=best)
+        # log(p k + 1 - p) = log1p(-p (1 - k))
+        best -= dtype(1.0)
+        best *= p_t
+        out += np.log1p(best).sum(axis=0, dtype=np.float64)
     return out
 
 

@@ -63,6 +63,7 @@ from lrp_gym.localization.monitor_frame import (
     nearest_residuals,
 )
 from lrp_gym.localization.pose_estimate import PoseEstimate
+from lrp_gym.localization.visibility import RadarLink
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
@@ -342,10 +343,14 @@ class ReflectorMonitor:
 
 
 def model_without(
-    world: World, cfg: LocalizationConfig, suspects: tuple[int, ...]
+    world: World,
+    cfg: LocalizationConfig,
+    suspects: tuple[int, ...],
+    link: RadarLink | None = None,
 ) -> FingerprintModel:
-    """The localisers' measurement model of ``world`` without the reflectors ``suspects``
-    (their returns become clutter); the full model when fewer than three would remain."""
+    """The localisers' measurement model of ``world`` (with the radar ``link``) without the
+    reflectors ``suspects`` (their returns become clutter); the full model when fewer than
+    three would remain."""
     layout = world.layout
     if len(layout) - len(suspects) < 3:
         suspects = ()
@@ -356,4 +361,4 @@ def model_without(
         type_index=layout.type_index[keep],
         axes=layout.axes[keep],
     )
-    return FingerprintModel.for_world(replace(world, layout=reduced), cfg)
+    return FingerprintModel.for_world(replace(world, layout=reduced), cfg, link)

@@ -160,7 +160,7 @@ class LocalizationStack:
             world,
             sensor,
             tracker,
-            make_localizer(world, loc),
+            make_localizer(world, loc, sensor),
             lut,
             dt_s=cfg.task.frame_period_s,
             measurements=loc.measurements,
@@ -312,9 +312,9 @@ class LocalizationStack:
         others = None if cmap is None else cmap.predicted_m(estimate.pose[:2])
         changed = monitor.update(estimate, gated, others, ego.speed_mps, detections)
         if changed and monitor.cfg.drop_suspects:
-            key = monitor.suspects
+            key, loc = monitor.suspects, self.localizer
             if key not in self._models:
-                self._models[key] = model_without(self.world, self.localizer.cfg, key)
+                self._models[key] = model_without(self.world, loc.cfg, key, loc.model.link)
             self.localizer.model = self._models[key]
         return monitor.suspects
 

@@ -52,6 +52,26 @@ def sidelobe_envelope(name: str, n: int, max_bins: float, step: float = 0.05) ->
     return np.maximum.accumulate(g[::-1])[::-1]
 
 
+def cfar_noise_statistic(cfar) -> float:
+    """The mean of the CFAR's noise estimate for a noise-only ring, in units of one cell's
+    noise power: the k-th order statistic of ``N`` exponential cells (OS), half the ring's
+    cells (SO, GO: they sum a half), 1 (CA: a mean)."""
+    n = cfar.n_training
+    if cfar.method == "OS":
+        return float(np.sum(1.0 / (n - np.arange(cfar.rank))))  # E[X_(k)], unit noise
+    if cfar.method in ("SO", "GO"):
+        return float(cfar.n_half)
+    return 1.0
+
+
+def cfar_threshold_w(sensor: RadarSensor) -> float:
+    """The map level a peak must exceed to be detected: ``alpha`` times the CFAR's mean noise
+    estimate (without noise: the level a noise-only cell would exceed with probability Pfa)."""
+    if not sensor.noise_on:
+        return -math.log(sensor.cfar.pfa) * sensor.noise_cell
+    return sensor.cfar.alpha * cfar_noise_statistic(sensor.cfar) * sensor.noise_cell
+
+
 class FastDetectionModel:
     """Detections straight from paths; build with :meth:`for_sensor`."""
 
@@ -70,12 +90,6 @@ class FastDetectionModel:
         k = cfar.rank if cfar.method == "OS" else max(n // 2, 1)
         self.max_occupied = n - k
         self.alpha = cfar.alpha
-        if cfar.method == "OS":
-            self.noise_stat = float(np.sum(1.0 / (n - np.arange(k))))  # E[X_(k)], unit noise
-        elif cfar.method in ("SO", "GO"):
-            self.noise_stat = float(cfar.n_half)
-        else:
-            self.noise_stat = 1.0
 
     @classmethod
     def for_sensor(cls, sensor: RadarSensor) -> FastDetectionModel:
@@ -192,12 +206,8 @@ class FastDetectionModel:
         return occupied.sum(axis=1) > self.max_occupied
 
     def _threshold(self) -> float:
-        """Step 4: the detection threshold, ``alpha`` times the noise statistic of one cell
-        (without noise: the level a noise-only cell would exceed with probability Pfa)."""
-        s = self.sensor
-        if not s.noise_on:
-            return -math.log(s.cfar.pfa) * s.noise_cell
-        return self.alpha * self.noise_stat * s.noise_cell
+        """Step 4: the detection threshold (:func:`cfar_threshold_w`)."""
+        return cfar_threshold_w(self.sensor)
 
     def _positions(
         self, crb: np.ndarray, cdb: np.ndarray, clean: np.ndarray, rng: np.random.Generator

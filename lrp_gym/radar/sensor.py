@@ -147,6 +147,10 @@ class RadarSensor:
         """
         paths = self.paths(pose, velocity_xy_mps, hidden=hidden, extra_scatterers=extra_scatterers)
         self.last_paths = paths
+        return self.detect(paths, rng)
+
+    def detect(self, paths: Paths, rng: np.random.Generator) -> Detections:
+        """The detections of given ``paths`` at this sensor's fidelity."""
         if self._fast is not None:
             self._last_map = None
             return self._fast.detect(paths, rng)

@@ -50,12 +50,20 @@ class Fingerprint:
         )
 
     @classmethod
-    def from_true(cls, layout, radar_position_m: np.ndarray, std_m: float = 0.075) -> Fingerprint:
-        """The exact fingerprint of a radar position for a :class:`ReflectorLayout`."""
+    def from_true(
+        cls,
+        layout,
+        radar_position_m: np.ndarray,
+        std_m: float = 0.075,
+        visible: np.ndarray | None = None,
+    ) -> Fingerprint:
+        """The exact fingerprint of a radar position for a :class:`ReflectorLayout`: every
+        reflector's distance, or only those of the reflectors ``visible`` (M,) bool marks."""
         dist = layout.distances_m(np.asarray(radar_position_m, dtype=float))
+        seen = np.ones(len(dist), bool) if visible is None else np.asarray(visible, bool)
         return cls.from_distances(
             layout.type_names,
-            [dist[layout.type_index == t] for t in range(len(layout.types))],
+            [dist[(layout.type_index == t) & seen] for t in range(len(layout.types))],
             std_m,
         )
 

@@ -1,0 +1,60 @@
+"""Converged-but-wrong steps in a room with an obstacle, by how many reflectors it hides.
+
+Pure pursuit on the env's default task in the paper room with a 1.4 m x 1.2 m x 1 m box
+(the obstacle-room rows of docs/trust.md), with or without unmapped clutter: the converged
+steps and the wrong ones (> 0.3 m off), split by how many reflectors the box hides from the
+true position and from the estimate.
+
+    PYTHONPATH=$PWD .venv/bin/python docs/scripts/obstacle_room_visibility.py --seeds 7300-7399 \\
+        [--severity 0.5]
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections import Counter
+
+import numpy as np
+from wrong_converged_features import default_task_steps  # the script beside this one
+
+from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M
+
+BOX = {"min": [0.8, 1.4, 0.0], "max": [2.2, 2.6, 1.0]}
+
+
+def hidden_count(world, xy: np.ndarray) -> int:
+    """How many reflectors the room's obstacles hide from a radar at floor position ``xy``."""
+    pos = world.layout.positions_m
+    radar = np.broadcast_to(world.radar_position(np.asarray(xy, float)), pos.shape)
+    return int(world.room.segments_blocked(radar, pos).sum())
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", default="7300-7399", help="FIRST-LAST")
+    ap.add_argument("--severity", type=float, default=0.5, help="clutter severity (0: none)")
+    args = ap.parse_args()
+    first, last = (int(s) for s in args.seeds.split("-"))
+    over = {"room": {"obstacles": [BOX]}}
+    steps, wrong = Counter(), Counter()
+    for step, info, amcl in default_task_steps(range(first, last + 1), args.severity, over):
+        if step == 0 or not info["converged"]:
+            continue
+        world = amcl.world
+        truth = hidden_count(world, np.asarray(info["true_pose"])[:2])
+        est = hidden_count(world, np.asarray(info["est_pose"])[:2])
+        steps[truth] += 1
+        if info["position_error_m"] > CONFIDENTLY_WRONG_M:
+            wrong[(truth, est)] += 1
+    total, bad = sum(steps.values()), sum(wrong.values())
+    print(f"{total} converged steps, {bad} wrong (> {CONFIDENTLY_WRONG_M} m): {bad / total:.1%}")
+    print("reflectors hidden at the truth | converged steps | wrong")
+    for k in sorted(steps):
+        n_wrong = sum(v for (t, _), v in wrong.items() if t == k)
+        print(f"{k} | {steps[k]} | {n_wrong}")
+    print("wrong steps by reflectors hidden at the truth / at the estimate:")
+    print(", ".join(f"{t}/{e}: {v}" for (t, e), v in sorted(wrong.items())))
+
+
+if __name__ == "__main__":
+    main()
