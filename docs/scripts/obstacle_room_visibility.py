@@ -3,7 +3,7 @@
 Pure pursuit on the env's default task in the paper room with a 1.4 m x 1.2 m x 1 m box
 (the obstacle-room rows of docs/trust.md), with or without unmapped clutter: the converged
 steps and the wrong ones (> 0.3 m off), split by how many reflectors the box hides from the
-true position and from the estimate.
+true position and from the estimate; and the env steps per CPU second.
 
     PYTHONPATH=$PWD .venv/bin/python docs/scripts/obstacle_room_visibility.py --seeds 7300-7399 \\
         [--severity 0.5]
@@ -12,6 +12,7 @@ true position and from the estimate.
 from __future__ import annotations
 
 import argparse
+import time
 from collections import Counter
 
 import numpy as np
@@ -37,7 +38,9 @@ def main() -> None:
     first, last = (int(s) for s in args.seeds.split("-"))
     over = {"room": {"obstacles": [BOX]}}
     steps, wrong = Counter(), Counter()
+    n_steps, cpu_s = 0, time.process_time()
     for step, info, amcl in default_task_steps(range(first, last + 1), args.severity, over):
+        n_steps += step > 0
         if step == 0 or not info["converged"]:
             continue
         world = amcl.world
@@ -46,6 +49,7 @@ def main() -> None:
         steps[truth] += 1
         if info["position_error_m"] > CONFIDENTLY_WRONG_M:
             wrong[(truth, est)] += 1
+    cpu_s = time.process_time() - cpu_s  # the counting below is not timed
     total, bad = sum(steps.values()), sum(wrong.values())
     print(f"{total} converged steps, {bad} wrong (> {CONFIDENTLY_WRONG_M} m): {bad / total:.1%}")
     print("reflectors hidden at the truth | converged steps | wrong")
@@ -54,6 +58,7 @@ def main() -> None:
         print(f"{k} | {steps[k]} | {n_wrong}")
     print("wrong steps by reflectors hidden at the truth / at the estimate:")
     print(", ".join(f"{t}/{e}: {v}" for (t, e), v in sorted(wrong.items())))
+    print(f"{n_steps} env steps, {n_steps / cpu_s:.1f} per CPU second (episodes included)")
 
 
 if __name__ == "__main__":
