@@ -36,7 +36,10 @@ speed on an unknown line of sight, uniform over ``+-|v|``, blurred by the same `
 static reflector at horizontal offset ``p_j - x`` and range ``e_j`` closes at ``u_j = -v .
 (p_j - x) / e_j``: the heading enters through the velocity ``v``. With a
 ``detection_probability`` ``P_D``, each mapped reflector adds ``log(P_D k_j + 1 - P_D)``,
-``k_j`` its best match's kernel among the distances of any type (negative information).
+``k_j`` its best match's kernel among the distances of any type (negative information); with
+a ``visibility`` model, ``P_D`` times the radar's probability ``p_j`` of detecting that
+reflector from the position (:mod:`~lrp_gym.localization.visibility`), and a reflector the
+position cannot see is left out of the terms above.
 Invariant to the order of the distances; the array code is in
 :mod:`~lrp_gym.localization.likelihood_terms`, the map's in :mod:`~lrp_gym.localization.map_returns`.
 """
