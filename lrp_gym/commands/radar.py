@@ -140,15 +140,21 @@ def radar_rate(
             wrote(out_path, quiet=True)
         return
     console.print(f"{cfg.name}, {fid} radar, {poses} poses, seed {seed}:", markup=False)
-    t = table("delivered per LRP", ("LRP", "type", "delivered"))
-    for i, (r, rate) in enumerate(zip(cfg.reflectors.layout, res.per_lrp_rate, strict=True)):
-        t.add_row(f"#{i}", r.type, f"{100 * rate:.1f} %")
+    t = table("delivered per LRP", ("LRP", "type", "delivered", "when in view"))
+    rates = zip(cfg.reflectors.layout, res.per_lrp_rate, res.per_lrp_in_view_rate, strict=True)
+    for i, (r, rate, seen) in enumerate(rates):
+        t.add_row(f"#{i}", r.type, f"{100 * rate:.1f} %", f"{100 * seen:.1f} %")
     console.print(t)
     console.print(
         f"all LRPs: delivered {100 * res.rate:.1f} % (within 10 cm: "
         f"{100 * res.range_only_rate:.1f} %), median RCS error {res.median_rcs_error_db:+.2f} dB, "
         f"range error std {100 * res.range_error_std_m:.2f} cm, "
         f"{res.mean_detections:.1f} detections/frame",
+        markup=False,
+    )
+    console.print(
+        f"when in view: delivered {100 * res.in_view_rate:.1f} % (the likelihood assumes "
+        f"localization.detection_probability = {100 * cfg.localization.detection_probability:.0f} %)",
         markup=False,
     )
     if out_path is not None:

@@ -38,6 +38,12 @@ class DetectionRate:
     n_poses, n_lrps : int
     per_lrp_rate : tuple of float
         ``rate`` of each LRP, in layout order.
+    in_view_rate : float
+        ``rate`` over the pairs where the LRP is in view (no obstacle on the line of sight,
+        inside its pattern's cutoff, in range): the detection probability the localiser's
+        likelihood assumes (``localization.detection_probability``).
+    per_lrp_in_view_rate : tuple of float
+        ``in_view_rate`` of each LRP (NaN for one never in view).
     """
 
     rate: float
@@ -48,6 +54,8 @@ class DetectionRate:
     n_poses: int
     n_lrps: int
     per_lrp_rate: tuple[float, ...] = ()
+    in_view_rate: float = float("nan")
+    per_lrp_in_view_rate: tuple[float, ...] = ()
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -114,6 +122,13 @@ def lrp_detection_rate(
             j = np.flatnonzero(good[m])[np.argmin(np.abs(err[m, good[m]]))]
             rcs_err.append(det.rcs_dbsm[j] - peak[m])
             rng_err.append(err[m, j])
+    ok_pairs = np.reshape(ok, (n_poses, len(lay)))
+    # Which LRP each pose can see at all (the localiser's visibility model, geometry only).
+    from lrp_gym.localization.visibility import ReflectorVisibility
+
+    in_view = ReflectorVisibility.of(world).visible(poses[:, :2]).T  # (n_poses, M)
+    seen = in_view.sum(axis=0)
+    per_in_view = (ok_pairs & in_view).sum(axis=0) / np.where(seen > 0, seen, np.nan)
     return DetectionRate(
         rate=float(np.mean(ok)),
         range_only_rate=float(np.mean(near)),
@@ -122,7 +137,9 @@ def lrp_detection_rate(
         mean_detections=float(np.mean(counts)),
         n_poses=int(n_poses),
         n_lrps=len(lay),
-        per_lrp_rate=tuple(float(r) for r in np.reshape(ok, (n_poses, len(lay))).mean(axis=0)),
+        per_lrp_rate=tuple(float(r) for r in ok_pairs.mean(axis=0)),
+        in_view_rate=float(ok_pairs[in_view].mean()) if in_view.any() else float("nan"),
+        per_lrp_in_view_rate=tuple(float(r) for r in per_in_view),
     )
 
 
