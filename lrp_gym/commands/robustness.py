@@ -131,8 +131,7 @@ def robustness(
             rb, PolicyFactory(agent, model, seed, settings), agent, env, names, sev, episodes,
             seed, task, scenario, json_out, over, num_envs, run,
         )  # fmt: skip
-    if settings:
-        result["agent_options"] = settings
+    result["agent_options"] = settings  # as evaluate writes it, {} without --agent-option
     if plot_path is not None:
         save_figure(rb.plot_matrix(result), plot_path)
     if out_path is not None:

@@ -151,3 +151,7 @@ def test_agent_options_reach_the_policy_and_the_record(capsys):
     code, out, _ = run_cli(capsys, *common, "--json")
     assert json.loads(out)["agent_options"] == {}
     assert json.loads(out)["per_episode"][0] != doc["per_episode"][0]
+    # robustness records them the same way, {} when none is given
+    cell = ("--perturbations", "clutter", "--severities", "0.5", "--json")
+    code, out, _ = run_cli(capsys, "robustness", *common[1:], *cell)
+    assert code == 0 and json.loads(out)["agent_options"] == {}
