@@ -104,7 +104,6 @@ def lrp_detection_rate(
     sensor = RadarSensor(world, radar_cfg)
     rng = np.random.default_rng(seed)
     poses, vels = random_poses(world, n_poses, rng, cfg.robot.radius_m, cfg.robot.max_speed_mps)
-    lay = world.layout
     peak, low, high = _rcs_window(world, cfg.tracking)
     ok, near, rcs_err, rng_err, counts = [], [], [], [], []
     for pose, vel in zip(poses, vels, strict=True):
@@ -122,13 +121,8 @@ def lrp_detection_rate(
             j = np.flatnonzero(good[m])[np.argmin(np.abs(err[m, good[m]]))]
             rcs_err.append(det.rcs_dbsm[j] - peak[m])
             rng_err.append(err[m, j])
-    ok_pairs = np.reshape(ok, (n_poses, len(lay)))
-    # Which LRP each pose can see at all (the localiser's visibility model, geometry only).
-    from lrp_gym.localization.visibility import ReflectorVisibility
-
-    in_view = ReflectorVisibility.of(world).visible(poses[:, :2]).T  # (n_poses, M)
-    seen = in_view.sum(axis=0)
-    per_in_view = (ok_pairs & in_view).sum(axis=0) / np.where(seen > 0, seen, np.nan)
+    ok_pairs = np.reshape(ok, (n_poses, len(world.layout)))
+    in_view_rate, per_in_view = _in_view_rates(world, poses, ok_pairs)
     return DetectionRate(
         rate=float(np.mean(ok)),
         range_only_rate=float(np.mean(near)),
@@ -136,11 +130,26 @@ def lrp_detection_rate(
         range_error_std_m=float(np.std(rng_err)) if rng_err else float("nan"),
         mean_detections=float(np.mean(counts)),
         n_poses=int(n_poses),
-        n_lrps=len(lay),
+        n_lrps=len(world.layout),
         per_lrp_rate=tuple(float(r) for r in ok_pairs.mean(axis=0)),
-        in_view_rate=float(ok_pairs[in_view].mean()) if in_view.any() else float("nan"),
-        per_lrp_in_view_rate=tuple(float(r) for r in per_in_view),
+        in_view_rate=in_view_rate,
+        per_lrp_in_view_rate=per_in_view,
     )
+
+
+def _in_view_rates(
+    world: World, poses: np.ndarray, ok_pairs: np.ndarray
+) -> tuple[float, tuple[float, ...]]:
+    """The delivered share ``ok_pairs`` (poses, M) over the pairs whose LRP the pose can see
+    at all (the localiser's visibility model, geometry only), in total and per LRP (NaN for
+    one never in view)."""
+    from lrp_gym.localization.visibility import ReflectorVisibility  # radar -> localization
+
+    in_view = ReflectorVisibility.of(world).visible(poses[:, :2]).T  # (poses, M)
+    seen = in_view.sum(axis=0)
+    per_lrp = (ok_pairs & in_view).sum(axis=0) / np.where(seen > 0, seen, np.nan)
+    total = float(ok_pairs[in_view].mean()) if in_view.any() else float("nan")
+    return total, tuple(float(r) for r in per_lrp)
 
 
 def _rcs_window(world: World, tracking: TrackingConfig) -> tuple[np.ndarray, ...]:
