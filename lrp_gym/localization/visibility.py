@@ -30,6 +30,7 @@ import numpy as np
 from scipy.stats import ncx2
 
 from lrp_gym.radar.detection_model import cfar_threshold_w
+from lrp_gym.world.reflector_view import reflector_view
 from lrp_gym.world.reflectors import ReflectorLayout
 from lrp_gym.world.room import Room
 
@@ -180,27 +181,12 @@ class ReflectorVisibility:
     def detection_probability(self, xy: np.ndarray) -> np.ndarray:
         """Probability (M, N) that reflector ``j`` is detected by a radar at floor position
         ``xy[i]`` (N, 2), in layout order: 0 where it is out of view."""
-        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
-        lay = self.layout
-        radar = np.empty((xy.shape[0], 3))
-        radar[:, :2] = xy
-        radar[:, 2] = self.mount_height_m
-        to_radar = radar[None, :, :] - lay.positions_m[:, None, :]  # (M, N, 3)
-        dist = np.sqrt(np.einsum("mnk,mnk->mn", to_radar, to_radar))
-        cos_inc = np.einsum("mnk,mk->mn", to_radar, lay.axes) / np.maximum(dist, 1e-12)
-        gain = np.empty_like(cos_inc)
-        for t, rtype in enumerate(lay.types):
-            rows = lay.type_index == t
-            gain[rows] = rtype.pattern(cos_inc[rows])
-        in_view = (dist <= self.max_range_m) & (gain > 0.0)
-        if self.room.obstacles:
-            ends = np.broadcast_to(lay.positions_m[:, None, :], to_radar.shape)
-            in_view &= ~self.room.segments_blocked(np.broadcast_to(radar, to_radar.shape), ends)
+        view = reflector_view(self.room, self.layout, self.mount_height_m, self.max_range_m, xy)
         if self.link is None:
-            return in_view.astype(float)
-        cos_zenith = -to_radar[..., 2] / np.maximum(dist, 1e-12)
-        pd = self.link.detection_probability(gain * lay.rcs_m2[:, None], dist, cos_zenith)
-        return np.where(in_view, pd, 0.0)
+            return view.in_view.astype(float)
+        rcs = view.gain * self.layout.rcs_m2[:, None]
+        pd = self.link.detection_probability(rcs, view.dist_m, view.cos_zenith)
+        return np.where(view.in_view, pd, 0.0)
 
     def visible(self, xy: np.ndarray) -> np.ndarray:
         """Boolean (M, N): the reflectors a radar at floor positions ``xy`` (N, 2) can see

@@ -16,6 +16,7 @@ import numpy as np
 from lrp_gym.config import ScenarioConfig, TrackingConfig
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
+from lrp_gym.world.reflector_view import reflector_view
 from lrp_gym.world.world import World
 
 
@@ -140,12 +141,12 @@ def lrp_detection_rate(
 def _in_view_rates(
     world: World, poses: np.ndarray, ok_pairs: np.ndarray
 ) -> tuple[float, tuple[float, ...]]:
-    """The delivered share ``ok_pairs`` (poses, M) over the pairs whose LRP the pose can see
-    at all (the localiser's visibility model, geometry only), in total and per LRP (NaN for
-    one never in view)."""
-    from lrp_gym.localization.visibility import ReflectorVisibility  # radar -> localization
-
-    in_view = ReflectorVisibility.of(world).visible(poses[:, :2]).T  # (poses, M)
+    """The delivered share ``ok_pairs`` (poses, M) over the pairs whose LRP the pose has in
+    view (line of sight, pattern, range), in total and per LRP (NaN for one never in view)."""
+    view = reflector_view(
+        world.room, world.layout, world.mount_height_m, world.fmcw.max_range_m, poses[:, :2]
+    )
+    in_view = view.in_view.T  # (poses, M)
     seen = in_view.sum(axis=0)
     per_lrp = (ok_pairs & in_view).sum(axis=0) / np.where(seen > 0, seen, np.nan)
     total = float(ok_pairs[in_view].mean()) if in_view.any() else float("nan")
