@@ -262,6 +262,13 @@ class LocalizationConfig(Strict):
         "the link budget): a hidden reflector explains no distance and its silence costs "
         "nothing; rooms where every reflector is detected everywhere are unaffected",
     )
+    detection_survey_poses: Annotated[int, Field(ge=0)] = Field(
+        default=0,
+        description="with reflector_visibility: poses of a calibration survey (radar frames at "
+        "random free poses, fixed seed) that measures how often the radar delivers each "
+        "reflector in view; each reflector's detection probability then averages to its "
+        "measured rate instead of detection_probability; 0: no survey",
+    )
     global_proposal: bool = Field(
         default=True,
         description="draw the global start and recovery particles from a map-wide grid of the "

@@ -24,11 +24,11 @@ import numpy as np
 
 from lrp_gym.config import LocalizationConfig, ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
-from lrp_gym.localization.factory import Localizer, make_localizer
+from lrp_gym.localization.factory import Localizer, make_localizer, radar_link
 from lrp_gym.localization.frame_result import FrameResult
 from lrp_gym.localization.lut import LookupTable
 from lrp_gym.localization.stack import LocalizationStack
-from lrp_gym.localization.visibility import RadarLink, ReflectorVisibility
+from lrp_gym.localization.visibility import ReflectorVisibility
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
@@ -163,10 +163,11 @@ class _Bench:
 
     def stacks(self) -> list[LocalizationStack]:
         """AMCL with the table; with the grid filter, a second stack on the same frames."""
-        out = [self.stack(Amcl(self.world, self.loc, RadarLink.from_sensor(self.sensor)), self.lut)]
+        link = radar_link(self.cfg, self.sensor)
+        out = [self.stack(Amcl(self.world, self.loc, link), self.lut)]
         if self.with_grid:
             grid_loc = self.loc.model_copy(update={"method": "grid"})
-            out.append(self.stack(make_localizer(self.world, grid_loc, self.sensor), None))
+            out.append(self.stack(make_localizer(self.world, grid_loc, link), None))
         return out
 
     def frame(
@@ -174,12 +175,11 @@ class _Bench:
     ) -> Detections | Fingerprint:
         """This frame's radar detections, or the exact fingerprint of the reflectors in view."""
         if self.true_fingerprints:
-            world = self.world
             return Fingerprint.from_true(
-                world.layout,
-                world.radar_position(pose[:2]),
+                self.world.layout,
+                self.world.radar_position(pose[:2]),
                 self.cfg.tracking.measurement_std_m,
-                ReflectorVisibility.of(world).visible(pose[None, :2])[:, 0],
+                ReflectorVisibility.of(self.world).visible(pose[None, :2])[:, 0],
             )
         return self.sensor.measure(pose, vel, rng)
 

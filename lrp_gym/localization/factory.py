@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from lrp_gym.config import LocalizationConfig
+from lrp_gym.config import LocalizationConfig, ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.grid import GridFilter
 from lrp_gym.localization.visibility import RadarLink
+from lrp_gym.radar.delivery_rate import lrp_detection_rate
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.world.world import World
 
@@ -15,15 +16,26 @@ Localizer = Amcl | GridFilter
 
 
 def make_localizer(
-    world: World, cfg: LocalizationConfig, radar: RadarSensor | None = None
+    world: World, cfg: LocalizationConfig, link: RadarLink | None = None
 ) -> Localizer:
     """A :class:`GridFilter` for ``cfg.method == "grid"``, else an :class:`Amcl`; with the
-    ``radar``, their model predicts each reflector's detection from its link budget.
+    radar's ``link`` (:func:`~lrp_gym.localization.visibility.radar_link`), their model
+    predicts each reflector's detection.
 
     With ``method: lut`` AMCL still runs: its cloud identifies the reflectors for the tracker
     and its heading completes the table's position.
     """
-    link = None if radar is None else RadarLink.from_sensor(radar)
     if cfg.method == "grid":
         return GridFilter(world, cfg, link)
     return Amcl(world, cfg, link)
+
+
+def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
+    """The link budget of ``sensor`` for the localiser of scenario ``cfg``; surveyed
+    (:meth:`RadarLink.surveyed`) when ``localization.detection_survey_poses`` asks for it."""
+    link = RadarLink.from_sensor(sensor)
+    loc = cfg.localization
+    if loc.detection_survey_poses == 0 or not loc.reflector_visibility:
+        return link
+    rate = lrp_detection_rate(cfg, loc.detection_survey_poses, seed=0)
+    return link.surveyed(rate.per_lrp_in_view_rate, loc.detection_probability)

@@ -23,7 +23,7 @@ model, bit for bit.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -77,6 +77,10 @@ class RadarLink:
         Detections nearer than this are dropped.
     pd_table : ndarray
         Detection probability on the SNR axis ``_SNR_DB`` (scalloping and noise averaged).
+    delivery : ndarray (M,) or None
+        Per reflector, the factor a calibration survey found between how often the radar
+        delivers it in view and what the likelihood's ``detection_probability`` assumes
+        (:meth:`surveyed`); None: 1 for all.
     """
 
     link_w_m2: float
@@ -85,6 +89,7 @@ class RadarLink:
     snr_per_w: float
     min_range_m: float
     pd_table: np.ndarray
+    delivery: np.ndarray | None = None
 
     @classmethod
     def from_sensor(cls, sensor: RadarSensor) -> RadarLink:
@@ -110,6 +115,15 @@ class RadarLink:
             min_range_m=float(sensor.min_range_m),
             pd_table=pd,
         )
+
+    def surveyed(self, in_view_rates: np.ndarray, detection_probability: float) -> RadarLink:
+        """This link with each reflector's detection scaled so that ``detection_probability``
+        times it is the reflector's delivered rate in view (``in_view_rates`` (M,), NaN for
+        one never in view: unscaled), between 0.05 and 0.95 (a survey of a few hundred frames
+        can neither prove a reflector silent nor always there)."""
+        rates = np.asarray(in_view_rates, dtype=float)
+        target = np.clip(np.where(np.isnan(rates), detection_probability, rates), 0.05, 0.95)
+        return replace(self, delivery=target / detection_probability)
 
     def detection_probability(
         self, rcs_m2: np.ndarray, dist_m: np.ndarray, cos_zenith: np.ndarray
@@ -186,6 +200,8 @@ class ReflectorVisibility:
             return view.in_view.astype(float)
         rcs = view.gain * self.layout.rcs_m2[:, None]
         pd = self.link.detection_probability(rcs, view.dist_m, view.cos_zenith)
+        if self.link.delivery is not None:
+            pd = pd * self.link.delivery[:, None]
         return np.where(view.in_view, pd, 0.0)
 
     def visible(self, xy: np.ndarray) -> np.ndarray:
