@@ -225,11 +225,10 @@ def bad_argv(draw, name: str, tmp: Path):
                 bad = draw(st.sampled_from(["nan", "inf", "abc", "1e999x", ""]))
                 v = [bad, "0", "0"] if kind is tuple else bad
             elif mode == "count":
-                bad = draw(
-                    st.sampled_from(
-                        ["-1", "0", "-1000000"] if kind is int else ["-1", "nan", "-inf"]
-                    )
-                )
+                # 0 is the documented "off" of an option whose default it is (--random-rooms)
+                off = type(p.default) is int and p.default == 0
+                ints = ["-1", "-1000000"] if off else ["-1", "0", "-1000000"]
+                bad = draw(st.sampled_from(ints if kind is int else ["-1", "nan", "-inf"]))
                 v = [bad, "0", "0"] if kind is tuple else bad
             else:
                 v = "~" + draw(st.text(alphabet="abcxyz_-.9", max_size=6))
