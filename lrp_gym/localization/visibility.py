@@ -68,7 +68,8 @@ class RadarLink:
         Transmit power times both antenna gains times ``lambda^2`` (W m^2): a point target
         of RCS ``s`` at range ``d`` returns ``link_w_m2 s / ((4 pi)^3 d^4)`` watts.
     antenna : ZenithPattern or None
-        The two-way antenna pattern over the zenith angle (None: isotropic).
+        The antenna's power pattern over the zenith angle, applied on the way out and back
+        (None: isotropic).
     body_shadowing : bool
         The robot's deck hides returns from below the radar.
     snr_per_w : float
