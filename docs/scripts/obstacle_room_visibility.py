@@ -6,21 +6,20 @@ steps and the wrong ones (> 0.3 m off), split by how many reflectors the box hid
 true position and from the estimate; and the env steps per CPU second.
 
     PYTHONPATH=$PWD .venv/bin/python docs/scripts/obstacle_room_visibility.py --seeds 7300-7399 \\
-        [--severity 0.5]
+        [--severity 0.5] [--set localization.detection_probability=0.6]
 """
 
 from __future__ import annotations
 
-import argparse
 import time
 from collections import Counter
 
 import numpy as np
-from wrong_converged_features import default_task_steps  # the script beside this one
+from wrong_converged_features import default_task_steps, study_args  # the script beside this one
 
 from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M
 
-BOX = {"min": [0.8, 1.4, 0.0], "max": [2.2, 2.6, 1.0]}
+BOX_SET = "room.obstacles=[{min: [0.8, 1.4, 0.0], max: [2.2, 2.6, 1.0]}]"
 
 
 def hidden_count(world, xy: np.ndarray) -> int:
@@ -31,15 +30,10 @@ def hidden_count(world, xy: np.ndarray) -> int:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", default="7300-7399", help="FIRST-LAST")
-    ap.add_argument("--severity", type=float, default=0.5, help="clutter severity (0: none)")
-    args = ap.parse_args()
-    first, last = (int(s) for s in args.seeds.split("-"))
-    over = {"room": {"obstacles": [BOX]}}
+    args = study_args(__doc__, sets=(BOX_SET,))
     steps, wrong = Counter(), Counter()
     n_steps, cpu_s = 0, time.process_time()
-    for step, info, amcl in default_task_steps(range(first, last + 1), args.severity, over):
+    for step, info, amcl in default_task_steps(args.seeds, args.severity, args.overrides):
         n_steps += step > 0
         if step == 0 or not info["converged"]:
             continue

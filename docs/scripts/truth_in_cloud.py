@@ -11,10 +11,8 @@ the confidence, the wrong share with and without a minority mode beside the band
 
 from __future__ import annotations
 
-import argparse
-
 import numpy as np
-from wrong_converged_features import default_task_steps  # the script beside this one
+from wrong_converged_features import default_task_steps, study_args  # the script beside this one
 
 from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M
 
@@ -24,11 +22,11 @@ FAR_M = 0.5
 BANDS = ((0.9, 0.95), (0.95, 0.99), (0.99, 1.0))
 
 
-def converged_steps(seeds: range, severity: float) -> np.ndarray:
+def converged_steps(seeds: range, severity: float, overrides: dict | None = None) -> np.ndarray:
     """One row per converged step: wrong, confidence, truth's mass, particles near the
     truth, particles, particles far from the estimate."""
     rows = []
-    for step, info, amcl in default_task_steps(seeds, severity):
+    for step, info, amcl in default_task_steps(seeds, severity, overrides):
         if step == 0 or not info["converged"]:
             continue
         xy = amcl.particles[:, :2]
@@ -42,12 +40,8 @@ def converged_steps(seeds: range, severity: float) -> np.ndarray:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", default="7300-7399", help="FIRST-LAST")
-    ap.add_argument("--severity", type=float, default=0.5, help="clutter severity (0: none)")
-    args = ap.parse_args()
-    first, last = (int(s) for s in args.seeds.split("-"))
-    r = converged_steps(range(first, last + 1), args.severity)
+    args = study_args(__doc__)
+    r = converged_steps(args.seeds, args.severity, args.overrides)
     wrong, conf, minority = r[:, 0] > 0, r[:, 1], r[:, 5] >= MINORITY_PARTICLES
     print(f"{len(r)} converged steps, {int(wrong.sum())} wrong (> {CONFIDENTLY_WRONG_M} m)")
     for name, sel in (("right", ~wrong), ("wrong", wrong)):

@@ -6,7 +6,7 @@ for the converged steps that are right and those off by more than 0.3 m, the 10t
 particle count and the whole cloud's position std (``info["pose_std"]``, x and y combined).
 
     PYTHONPATH=$PWD .venv/bin/python docs/scripts/wrong_converged_features.py --seeds 7300-7399 \
-        [--severity 0.5]
+        [--severity 0.5] [--set KEY=VALUE]
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 
 import lrp_gym  # noqa: F401  (registers the ids)
 from agents.pure_pursuit import PurePursuitPolicy
+from lrp_gym.commands._common import parse_sets
 from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M
 
 FEATURES = ("step", "driven_m", "confidence", "particles", "cloud_std_m")
@@ -52,10 +53,27 @@ def default_task_steps(
         env.close()
 
 
-def converged_steps(seeds: range, severity: float) -> tuple[np.ndarray, np.ndarray]:
+def study_args(doc: str, sets: tuple[str, ...] = ()) -> argparse.Namespace:
+    """The options of the scripts built on :func:`default_task_steps`: ``--seeds FIRST-LAST``
+    (``.seeds``, a range), ``--severity`` of the clutter and ``--set KEY=VALUE`` (repeatable,
+    after ``sets``; ``.overrides``, the scenario override dict)."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--seeds", default="7300-7399", help="FIRST-LAST")
+    ap.add_argument("--severity", type=float, default=0.5, help="clutter severity (0: none)")
+    ap.add_argument("--set", action="append", default=[], dest="sets", metavar="KEY=VALUE")
+    args = ap.parse_args()
+    first, last = (int(s) for s in args.seeds.split("-"))
+    args.seeds = range(first, last + 1)
+    args.overrides = parse_sets([*sets, *args.sets])
+    return args
+
+
+def converged_steps(
+    seeds: range, severity: float, overrides: dict | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Features (K, 5) of every converged step, and whether each is wrong (K,)."""
     rows, wrong = [], []
-    for step, info, _ in default_task_steps(seeds, severity):
+    for step, info, _ in default_task_steps(seeds, severity, overrides):
         xy = np.asarray(info["true_pose"])[:2]
         if step == 0:  # the reset
             driven, last_xy = 0.0, xy
@@ -71,12 +89,8 @@ def converged_steps(seeds: range, severity: float) -> tuple[np.ndarray, np.ndarr
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--seeds", default="7300-7399", help="FIRST-LAST")
-    ap.add_argument("--severity", type=float, default=0.5, help="clutter severity (0: none)")
-    args = ap.parse_args()
-    first, last = (int(s) for s in args.seeds.split("-"))
-    x, wrong = converged_steps(range(first, last + 1), args.severity)
+    args = study_args(__doc__)
+    x, wrong = converged_steps(args.seeds, args.severity, args.overrides)
     print(f"{len(wrong)} converged steps, {int(wrong.sum())} wrong (> {CONFIDENTLY_WRONG_M} m)")
     print("feature | right: p10 / p50 / p90 | wrong: p10 / p50 / p90")
     for k, name in enumerate(FEATURES):

@@ -152,7 +152,6 @@ class FingerprintModel:
         visibility: ReflectorVisibility | VisibilityMap | None = None,
     ) -> None:
         self.use_numba = use_numba
-        self.visibility = visibility
         self.room = room
         self.detection_probability = float(detection_probability)
         self.doppler_std_mps = float(doppler_std_mps)
@@ -199,6 +198,11 @@ class FingerprintModel:
                 ReflectorVisibility.for_world(world, link) if cfg.reflector_visibility else None
             ),
         )
+
+    @property
+    def visibility(self) -> ReflectorVisibility | VisibilityMap | None:
+        """The detection model of :attr:`reflectors` (None: every reflector everywhere)."""
+        return self.reflectors.visibility
 
     @property
     def link(self) -> RadarLink | None:

@@ -276,15 +276,8 @@ def _missed_term(frame: _Frame, segments: list[Segment]) -> np.ndarray:
         if count == 0:
             continue
         e = frame.expected_of(t)[0]  # (m, N)
-        matched = frame.matched.get(t)
-        for seg in segments:
-            if seg.type_index == t and matched is not None:
-                continue  # the segment's own kernel, kept by _segment_term
-            r = e[None, :, :] - seg.z.astype(dtype)[:, None, None]
-            r *= r
-            r *= (-0.5 / seg.s2).astype(dtype)[:, None, None]
-            best = np.exp(r.max(axis=0))  # exp is monotone: the largest kernel
-            matched = best if matched is None else np.maximum(matched, best, out=matched)
+        matched = frame.matched.get(t)  # the segment's own kernel, kept by _segment_term
+        matched = _best_kernels(e, segments, dtype, matched, t if matched is not None else None)
         if matched is None:  # no distance at all: every reflector of the type missed
             out += count * np.log1p(-float(p_d))
             continue
@@ -292,6 +285,27 @@ def _missed_term(frame: _Frame, segments: list[Segment]) -> np.ndarray:
         matched += dtype(1.0) - p_d
         out += np.log(matched).sum(axis=0, dtype=np.float64)
     return out
+
+
+def _best_kernels(
+    e: np.ndarray,
+    segments: list[Segment],
+    dtype,
+    matched: np.ndarray | None = None,
+    skip_type: int | None = None,
+) -> np.ndarray | None:
+    """Each reflector's largest kernel ``exp(-r^2 / (2 s^2))`` (m, N) against the distances
+    of every segment (of any type) but the one of ``skip_type``, from its ranges ``e`` (m, N),
+    folded into ``matched`` (in place); None when there is no distance at all."""
+    for seg in segments:
+        if seg.type_index == skip_type:
+            continue
+        r = e[None, :, :] - seg.z.astype(dtype)[:, None, None]
+        r *= r
+        r *= (-0.5 / seg.s2).astype(dtype)[:, None, None]
+        best = np.exp(r.max(axis=0))  # exp is monotone: the largest kernel
+        matched = best if matched is None else np.maximum(matched, best, out=matched)
+    return matched
 
 
 def _missed_term_per_reflector(frame: _Frame, segments: list[Segment]) -> np.ndarray:
@@ -307,12 +321,9 @@ def _missed_term_per_reflector(frame: _Frame, segments: list[Segment]) -> np.nda
         if count == 0:
             continue
         p_t = p[model.reflectors.type_rows[t]]  # (m, N)
-        best = np.zeros_like(p_t)
-        for seg in segments:
-            r = ranges[t][None, :, :] - seg.z.astype(dtype)[:, None, None]
-            r *= r
-            r *= (-0.5 / seg.s2).astype(dtype)[:, None, None]
-            np.maximum(best, np.exp(r.max(axis=0)), out=best)
+        best = _best_kernels(ranges[t], segments, dtype)
+        if best is None:  # no distance at all
+            best = np.zeros_like(p_t)
         # log(p k + 1 - p) = log1p(-p (1 - k))
         best -= dtype(1.0)
         best *= p_t
