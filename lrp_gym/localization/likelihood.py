@@ -303,6 +303,7 @@ class FingerprintModel:
         map_ranges: np.ndarray | None = None,
         map_rates: np.ndarray | None = None,
         expected: list[np.ndarray] | None = None,
+        p_detect: np.ndarray | None = None,
     ) -> np.ndarray:
         """Log-likelihood (N,) float64 of ``fingerprint`` at each position of ``xy`` (N, 2).
 
@@ -317,7 +318,8 @@ class FingerprintModel:
         ``map_rates``, their radial velocities at ``velocity_xy`` (:meth:`map_returns_at`),
         and computed with their velocities otherwise. ``expected``, :meth:`expected` of ``xy``
         in ``dtype``, likewise saves recomputing the reflectors' ranges where the Doppler term
-        does not apply (it is ignored where it does).
+        does not apply (it is ignored where it does). ``p_detect``, the reflectors'
+        :meth:`ReflectorRanges.detection_probabilities` at ``xy``, saves recomputing them.
         """
         doppler = (
             velocity_xy is not None
@@ -332,7 +334,7 @@ class FingerprintModel:
         if map_ranges is not None and (vel is None or map_rates is not None):
             given = (map_ranges, None if vel is None else map_rates)
         expected = expected if vel is None else None
-        return terms.log_likelihood_terms(self, xy, segments, vel, given, dtype, expected)
+        return terms.log_likelihood_terms(self, xy, segments, vel, given, dtype, expected, p_detect)
 
     def distance_fits(
         self, xy: np.ndarray, weights: np.ndarray, fingerprint: Fingerprint

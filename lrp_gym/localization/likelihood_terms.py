@@ -94,7 +94,7 @@ class _Frame:
     """What the types of one frame share: positions, the expected ranges (computed on first
     use) and the map's predicted returns (computed on first use, or given)."""
 
-    def __init__(self, model, xy, velocity_xy, map_returns, dtype) -> None:
+    def __init__(self, model, xy, velocity_xy, map_returns, dtype, p_detect=None) -> None:
         self.model = model
         self.xy = xy
         self.velocity_xy = velocity_xy  # None without the Doppler term
@@ -108,7 +108,7 @@ class _Frame:
         # Per type index: each reflector's best kernel against its own type's distances.
         self.matched: dict[int, np.ndarray] = {}
         self.extra = self.extra_v = None
-        self._p_detect: np.ndarray | None = None
+        self._p_detect: np.ndarray | None = p_detect
         if map_returns is not None:  # (ranges, rates), rates given iff velocity_xy is
             self.extra = map_returns[0].astype(dtype, copy=False)
             if map_returns[1] is not None:
@@ -152,13 +152,15 @@ def log_likelihood_terms(
     map_returns: tuple[np.ndarray, np.ndarray | None] | None,
     dtype,
     expected: list[np.ndarray] | None = None,
+    p_detect: np.ndarray | None = None,
 ) -> np.ndarray:
     """Log-likelihood (N,) of the ``segments`` of a fingerprint at positions ``xy`` (N, 2);
     ``velocity_xy`` is None unless the Doppler term applies. ``map_returns``, if given, are
     the map's predicted ranges (K, N) at ``xy`` and, iff ``velocity_xy`` is given, their
     radial velocities; ``expected``, if given, the reflectors' sorted ranges at ``xy`` (the
-    Doppler term aside)."""
-    frame = _Frame(model, xy, velocity_xy, map_returns, dtype)
+    Doppler term aside); ``p_detect``, if given, the reflectors' detection probabilities at
+    ``xy``."""
+    frame = _Frame(model, xy, velocity_xy, map_returns, dtype, p_detect)
     frame.expected = expected
     out = np.zeros(xy.shape[0])
     for seg in segments:

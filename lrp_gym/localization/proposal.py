@@ -71,6 +71,7 @@ class MeasurementGrid:
         self._map_model: FingerprintModel | None = None
         self._map_ranges: list[np.ndarray | None] = []
         self._expected: list[list[np.ndarray]] = []
+        self._p_detect: list[np.ndarray | None] = []
 
     def __len__(self) -> int:
         return len(self.centres_m)
@@ -81,15 +82,22 @@ class MeasurementGrid:
         xy = self.centres_m
         chunks = range(0, len(xy), _CHUNK)
         if self._map_model is not model:
-            # The cells do not move: the map's predicted returns and the reflectors' ranges
-            # there are computed once per model.
+            # The cells do not move: the map's predicted returns, the reflectors' detection
+            # probabilities and ranges there are computed once per model.
             self._map_model = model
-            self._map_ranges = [model.map_return_ranges(xy[i : i + _CHUNK]) for i in chunks]
-            self._expected = [model.expected(xy[i : i + _CHUNK], np.float32) for i in chunks]
+            parts = [xy[i : i + _CHUNK] for i in chunks]
+            self._map_ranges = [model.map_return_ranges(part) for part in parts]
+            self._p_detect = [model.reflectors.detection_probabilities(part) for part in parts]
+            self._expected = [
+                model.expected(part, np.float32, p) for part, p in zip(parts, self._p_detect)
+            ]
+        cached = zip(chunks, self._map_ranges, self._expected, self._p_detect, strict=True)
         return np.concatenate(
             [
-                model.log_likelihood(xy[i : i + _CHUNK], fingerprint, map_ranges=r, expected=e)
-                for i, r, e in zip(chunks, self._map_ranges, self._expected, strict=True)
+                model.log_likelihood(
+                    xy[i : i + _CHUNK], fingerprint, map_ranges=r, expected=e, p_detect=p
+                )
+                for i, r, e, p in cached
             ]
             or [np.zeros(0)]
         )

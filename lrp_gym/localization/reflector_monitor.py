@@ -66,6 +66,7 @@ from lrp_gym.localization.pose_estimate import PoseEstimate
 from lrp_gym.localization.visibility import RadarLink
 from lrp_gym.radar.detections import Detections
 from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.world.reflector_view import reflector_view
 from lrp_gym.world.world import World
 
 
@@ -160,16 +161,13 @@ class ReflectorMonitor:
         """:meth:`_expected`, the horizontal part (M, 2) of each unit vector from the radar
         to the reflector (how a reflector's distance changes as it moves) and each one's RCS
         at this aspect (M,), m^2."""
-        layout, room = self.world.layout, self.world.room
-        radar = self.world.radar_position(np.asarray(xy, dtype=float))
-        dist = layout.distances_m(radar)
-        bearing = (layout.positions_m[:, :2] - radar[:2]) / np.maximum(dist, 1e-9)[:, None]
-        rcs_m2 = layout.effective_rcs_m2(radar)
-        ok = (rcs_m2 >= self.cfg.min_gain * layout.rcs_m2) & (dist <= self.max_range_m)
-        if room.obstacles:
-            starts = np.broadcast_to(radar, layout.positions_m.shape)
-            ok &= ~room.segments_blocked(starts, layout.positions_m)
-        return dist, ok, bearing, rcs_m2
+        world, xy = self.world, np.asarray(xy, dtype=float)
+        # The monitor's own range (the tracker's) and pattern threshold on the shared view.
+        view = reflector_view(world.room, world.layout, world.mount_height_m, np.inf, xy[None])
+        dist, gain = view.dist_m[:, 0], view.gain[:, 0]
+        bearing = (world.layout.positions_m[:, :2] - xy) / np.maximum(dist, 1e-9)[:, None]
+        ok = view.in_view[:, 0] & (gain >= self.cfg.min_gain) & (dist <= self.max_range_m)
+        return dist, ok, bearing, gain * world.layout.rcs_m2
 
     def update(
         self,
