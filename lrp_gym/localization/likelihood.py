@@ -39,7 +39,9 @@ static reflector at horizontal offset ``p_j - x`` and range ``e_j`` closes at ``
 ``k_j`` its best match's kernel among the distances of any type (negative information); with
 a ``visibility`` model, ``P_D`` times the radar's probability ``p_j`` of detecting that
 reflector from the position (:mod:`~lrp_gym.localization.visibility`), and a reflector the
-position cannot see is left out of the terms above.
+position cannot see is left out of the terms above; clutter and room returns keep their
+expected numbers, so where ``m_s`` of a type's ``m`` reflectors are seen, the shares of a
+distance are divided by ``1 - r (m - m_s) / m`` (``r`` the reflectors' share with all seen).
 Invariant to the order of the distances; the array code is in
 :mod:`~lrp_gym.localization.likelihood_terms`, the map's in :mod:`~lrp_gym.localization.map_returns`.
 """

@@ -207,23 +207,29 @@ def _segment_term(frame: _Frame, seg: Segment) -> np.ndarray:
         frame.matched[seg.type_index] = r.max(axis=0)
     if dens_v is not None:
         r *= dens_v
-    if m_seen is None:
-        g = r.mean(axis=1)  # (n, N)
-    else:  # a hidden reflector's kernel is 0: the mean over the seen ones
-        g = r.sum(axis=1)
-        g /= np.maximum(m_seen, 1).astype(dtype)
+    g = r.mean(axis=1)  # (n, N); a hidden reflector's kernel is 0
     if model.map_returns is not None:
         _add_map_returns(frame, seg, g, half_inv[:, 0])
     clutter = model.clutter_density_for(
         dens_v is not None, frame.speed_mps, seg.v if dens_v is not None else None
     )
     log_mix = _log_mixture(g, log_norm, c, clutter, dtype)
+    p_clean = model.clean_probability
+    if m_seen is not None:
+        # A position that sees fewer reflectors expects fewer reflector returns and as many
+        # clutter and room returns: 1 - r (m - m_seen) / m of the returns expected with all
+        # m seen remain (r the reflectors' share then), and every source's share of a
+        # distance is divided by that (with c = 0 above: the mean over the seen ones).
+        seen_share = 1.0 - p_clean * (m - m_seen) / m
+        log_mix -= n * np.log(seen_share)
+        p_clean = p_clean * (m_seen / m) / seen_share
     if log_sorted is None:
         return log_mix
     # All n distances are reflectors with probability (1 - c)^n: sorted assignment;
     # otherwise at least one is clutter (and one reflector missed): the mixture.
-    p_clean = model.clean_probability**n
-    both = np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
+    p_clean = p_clean**n
+    with np.errstate(divide="ignore"):
+        both = np.logaddexp(np.log(p_clean) + log_sorted, np.log1p(-p_clean) + log_mix)
     return both if counts_match is None else np.where(counts_match, both, log_mix)
 
 

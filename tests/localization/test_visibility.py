@@ -62,8 +62,10 @@ def test_the_paper_room_needs_no_visibility_model():
 @pytest.mark.parametrize("extra_m", [None, 2.2])
 def test_a_hidden_reflector_counts_as_absent(doppler, extra_m):
     """Where a box hides reflector 0, the model with visibility equals, at that position, the
-    plain model of the layout without reflector 0: the sorted assignment of the seen ones,
-    their mixture, and no cost for the hidden one's silence."""
+    plain model of the layout without reflector 0 in which clutter keeps its expected number
+    of returns: the sorted assignment of the seen ones, their mixture, no cost for the hidden
+    one's silence, and a clutter share of c / (1 - (1 - c) / 4) (one of four reflectors' share
+    of the returns gone)."""
     positions = [[1.0, 2.0, 3.0], [4.2, 0.8, 3.0], [4.0, 4.3, 3.0], [2.0, 4.5, 3.0]]
     layout = _layout(positions, axes=np.tile(DOWN, (4, 1)))
     room = Room(np.array([5.0, 5.0, 4.0]), (Box([2.4, 1.5, 0.0], [2.6, 2.5, 1.2]),))
@@ -71,9 +73,9 @@ def test_a_hidden_reflector_counts_as_absent(doppler, extra_m):
     vis = ReflectorVisibility(room, layout, 0.3, 10.0)
     assert vis.visible(xy)[:, 0].tolist() == [False, True, True, True]
 
-    def model(lay, visibility):
+    def model(lay, visibility, clutter=0.05):
         return FingerprintModel(
-            lay, 0.3, 0.05, 0.05, 10.0, doppler_std_mps=0.15 if doppler else 0.0,
+            lay, 0.3, 0.05, clutter, 10.0, doppler_std_mps=0.15 if doppler else 0.0,
             detection_probability=0.8, visibility=visibility,
         )  # fmt: skip
 
@@ -87,7 +89,8 @@ def test_a_hidden_reflector_counts_as_absent(doppler, extra_m):
     fp = Fingerprint(("A",), (d,), (v,), (np.ones(len(d), bool),), None if vel is None else (vel,))
     velocity_xy = np.array([[0.3, 0.1]] * 2) if doppler else None
     got = model(layout, vis).log_likelihood(xy[:1], fp, velocity_xy=_first(velocity_xy))
-    want = model(seen, None).log_likelihood(xy[:1], fp, velocity_xy=_first(velocity_xy))
+    clutter = 0.05 / (1.0 - 0.95 / 4)
+    want = model(seen, None, clutter).log_likelihood(xy[:1], fp, velocity_xy=_first(velocity_xy))
     np.testing.assert_allclose(got, want, rtol=1e-5)
     # Without the visibility, the silent reflector costs log(1 - P_D) there and the frame's
     # three distances cannot take the sorted assignment of four.
