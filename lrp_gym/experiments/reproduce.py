@@ -28,7 +28,7 @@ from lrp_gym.localization.factory import Localizer, make_localizer, radar_link
 from lrp_gym.localization.frame_result import FrameResult
 from lrp_gym.localization.lut import LookupTable
 from lrp_gym.localization.stack import LocalizationStack
-from lrp_gym.localization.visibility import ReflectorVisibility
+from lrp_gym.localization.visibility import RadarLink, ReflectorVisibility
 from lrp_gym.radar.detections import Detections
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
@@ -121,7 +121,7 @@ def converged_after(
 
 @dataclass
 class _Bench:
-    """What every run shares: the world, the drive, the radar, the table and its build time."""
+    """What every run shares: world, drive, radar, table (and build time), link and AMCL."""
 
     cfg: ScenarioConfig
     loc: LocalizationConfig
@@ -132,6 +132,8 @@ class _Bench:
     lut_build_s: float
     true_fingerprints: bool
     with_grid: bool
+    link: RadarLink | None
+    amcl: Amcl
 
     @classmethod
     def build(
@@ -146,7 +148,10 @@ class _Bench:
         lut = LookupTable(world, loc.lut_resolution_m, loc.lut_grid_m, 0.0)
         lut_build_s = time.perf_counter() - t0
         sensor = RadarSensor(world, cfg.radar)
-        return cls(cfg, loc, world, traj, sensor, lut, lut_build_s, true_fingerprints, with_grid)
+        link = radar_link(cfg, sensor)  # and the opt-in survey: once, not per run
+        amcl = Amcl(world, loc, link)
+        args = (lut, lut_build_s, true_fingerprints, with_grid, link, amcl)
+        return cls(cfg, loc, world, traj, sensor, *args)
 
     def stack(self, localizer: Localizer, lut: LookupTable | None) -> LocalizationStack:
         """A fresh stack (new tracker) around ``localizer`` on the shared radar."""
@@ -162,12 +167,12 @@ class _Bench:
         )
 
     def stacks(self) -> list[LocalizationStack]:
-        """AMCL with the table; with the grid filter, a second stack on the same frames."""
-        link = radar_link(self.cfg, self.sensor)
-        out = [self.stack(Amcl(self.world, self.loc, link), self.lut)]
+        """AMCL (sharing the prototype's model and grids) with the table; with the grid filter,
+        a second stack on the same frames."""
+        out = [self.stack(self.amcl.spawn(), self.lut)]
         if self.with_grid:
             grid_loc = self.loc.model_copy(update={"method": "grid"})
-            out.append(self.stack(make_localizer(self.world, grid_loc, link), None))
+            out.append(self.stack(make_localizer(self.world, grid_loc, self.link), None))
         return out
 
     def frame(
@@ -355,13 +360,8 @@ def run_to_json(r: _RunErrors) -> dict:
 def run_from_json(d: dict) -> _RunErrors:
     """The inverse of :func:`run_to_json`."""
     grid = None if d["grid"] is None else np.asarray(d["grid"], dtype=float)
-    return _RunErrors(
-        np.asarray(d["lut"], dtype=float),
-        np.asarray(d["amcl"], dtype=float),
-        grid,
-        np.asarray(d["particles"], dtype=int),
-        dict(d["timing_s"]),
-    )
+    lut, amcl = (np.asarray(d[key], dtype=float) for key in ("lut", "amcl"))
+    return _RunErrors(lut, amcl, grid, np.asarray(d["particles"], dtype=int), dict(d["timing_s"]))
 
 
 def _reproduction(

@@ -80,3 +80,30 @@ def test_reproduce_paper_rejects_an_unknown_localizer():
     with pytest.raises(SystemExit) as exc:
         main(["reproduce-paper", "--localizer", "kalman"])
     assert exc.value.code == 2
+
+
+def test_runs_that_share_the_prototype_filter_equal_runs_built_afresh(paper_cfg):
+    """The bench builds AMCL (its visibility table, grids, link) once; each run's filter is
+    a spawn of it. Run 2 of the loop equals run 2 with its own bench and filter (a runner that
+    rebuilds the bench for every unit), in a room where the model has a visibility table."""
+    from lrp_gym.experiments import reproduce as rp
+
+    cfg = paper_cfg.with_overrides(
+        {
+            "room": {"obstacles": [{"min": [0.8, 1.4, 0.0], "max": [2.2, 2.6, 1.0]}]},
+            "localization": {"initial_particles": 1000, "max_particles": 1000},
+        }
+    )
+
+    def afresh(task, items):
+        out = []
+        for _, unit in items:
+            rp._BENCHES.clear()  # a new bench: a new prototype filter
+            out.append(task(unit))
+        return out
+
+    shared = rp.reproduce(cfg, runs=2, seed=5)
+    fresh = rp.reproduce(cfg, runs=2, seed=5, runner=afresh)
+    assert shared.amcl_errors_m.shape == (2, 15)
+    np.testing.assert_array_equal(shared.amcl_errors_m, fresh.amcl_errors_m)
+    np.testing.assert_array_equal(shared.amcl_particles, fresh.amcl_particles)
