@@ -263,11 +263,12 @@ class LocalizationConfig(Strict):
         "nothing; rooms where every reflector is detected everywhere are unaffected",
     )
     detection_survey_poses: Annotated[int, Field(ge=0)] = Field(
-        default=0,
-        description="with reflector_visibility: poses of a calibration survey (radar frames at "
-        "random free poses, fixed seed) that measures how often the radar delivers each "
-        "reflector in view; each reflector's detection probability then averages to its "
-        "measured rate instead of detection_probability; 0: no survey",
+        default=200,
+        description="with reflector_visibility, in rooms that need it: poses of a calibration "
+        "survey (radar frames at random free poses, fixed seed) that measures how often the "
+        "radar delivers each reflector in view; a reflector delivered less often than "
+        "detection_probability gets its measured rate instead (never more: misses repeat "
+        "along the path); 0: no survey",
     )
     global_proposal: bool = Field(
         default=True,

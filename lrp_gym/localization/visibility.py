@@ -118,12 +118,15 @@ class RadarLink:
         )
 
     def surveyed(self, in_view_rates: np.ndarray, detection_probability: float) -> RadarLink:
-        """This link with each reflector's detection scaled so that ``detection_probability``
-        times it is the reflector's delivered rate in view (``in_view_rates`` (M,), NaN for
-        one never in view: unscaled), between 0.05 and 0.95 (a survey of a few hundred frames
-        can neither prove a reflector silent nor always there)."""
+        """This link with each reflector's detection scaled down so that
+        ``detection_probability`` times it is the reflector's delivered rate in view
+        (``in_view_rates`` (M,), NaN for one never in view: unscaled), at least 0.05 (a survey
+        of a few hundred frames cannot prove a reflector silent). Never up: a reflector's
+        misses repeat along the path, so a per-frame rate above ``detection_probability``
+        would charge the true pose for one lasting miss again and again (docs/trust.md)."""
         rates = np.asarray(in_view_rates, dtype=float)
-        target = np.clip(np.where(np.isnan(rates), detection_probability, rates), 0.05, 0.95)
+        target = np.where(np.isnan(rates), detection_probability, rates)
+        target = np.clip(np.minimum(target, detection_probability), 0.05, None)
         return replace(self, delivery=target / detection_probability)
 
     def detection_probability(
@@ -181,17 +184,20 @@ class ReflectorVisibility:
 
     @classmethod
     def for_world(cls, world: World, link: RadarLink | None = None) -> VisibilityMap | None:
-        """The model of ``world`` as a :class:`VisibilityMap`, or None when every reflector
-        is detected with probability at least :data:`SURE_DETECTION_PROBABILITY` from every
-        free point of a 5 cm floor grid (nothing to model)."""
+        """The model of ``world`` as a :class:`VisibilityMap`, or None when it is not
+        :meth:`needed`."""
         vis = cls.of(world, link)
+        return VisibilityMap(vis, world.room.size_m[:2]) if vis.needed(world) else None
+
+    def needed(self, world: World) -> bool:
+        """Whether some reflector is detected with probability below
+        :data:`SURE_DETECTION_PROBABILITY` from some free point of a 5 cm floor grid of
+        ``world`` (else there is nothing to model)."""
         size = world.room.size_m
         axes = [np.arange(_SURVEY_GRID_M / 2, size[k], _SURVEY_GRID_M) for k in range(2)]
         xy = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 2)
         xy = xy[world.room.free(xy)]
-        if len(xy) == 0 or vis.detection_probability(xy).min() >= SURE_DETECTION_PROBABILITY:
-            return None
-        return VisibilityMap(vis, size[:2])
+        return len(xy) > 0 and self.detection_probability(xy).min() < SURE_DETECTION_PROBABILITY
 
     def detection_probability(self, xy: np.ndarray) -> np.ndarray:
         """Probability (M, N) that reflector ``j`` is detected by a radar at floor position

@@ -217,16 +217,17 @@ def test_the_map_interpolates_the_exact_probabilities():
     )
 
 
-def test_a_survey_scales_each_reflector_to_its_delivered_rate_in_view():
+def test_a_survey_scales_each_reflector_down_to_its_delivered_rate_in_view():
     """``detection_survey_poses``: the likelihood's detection probability of each reflector,
-    ``P_D p_j``, averages to the rate at which the radar delivered it in view, clipped to
-    [0.05, 0.95]; a reflector never in view keeps ``P_D``."""
+    ``P_D p_j``, averages to the rate at which the radar delivered it in view where that is
+    below ``P_D``, at least 0.05; a reflector never in view or delivered more often keeps
+    ``P_D``."""
     from lrp_gym.localization.factory import radar_link
     from lrp_gym.radar.delivery_rate import lrp_detection_rate
 
     link = RadarLink(1.0, None, False, 1.0, 0.0, np.ones(3))
-    scaled = link.surveyed(np.array([0.4, 0.99, np.nan]), 0.8)
-    np.testing.assert_allclose(scaled.delivery * 0.8, [0.4, 0.95, 0.8])
+    scaled = link.surveyed(np.array([0.4, 0.99, np.nan, 0.0]), 0.8)
+    np.testing.assert_allclose(scaled.delivery * 0.8, [0.4, 0.8, 0.8, 0.05])
     box = {"min": [0.8, 1.4, 0.0], "max": [2.2, 2.6, 1.0]}
     cfg = load_scenario("ipin2023").with_overrides(
         {
@@ -237,6 +238,10 @@ def test_a_survey_scales_each_reflector_to_its_delivered_rate_in_view():
     )
     link = radar_link(cfg, RadarSensor(World.from_config(cfg), cfg.radar))
     rates = np.array(lrp_detection_rate(cfg, 60, seed=0).per_lrp_in_view_rate)
-    np.testing.assert_allclose(link.delivery * 0.8, np.clip(rates, 0.05, 0.95))
+    np.testing.assert_allclose(link.delivery * 0.8, np.clip(rates, 0.05, 0.8))
     off = cfg.with_overrides({"localization": {"detection_survey_poses": 0}})
     assert radar_link(off, RadarSensor(World.from_config(off), off.radar)).delivery is None
+    # The default surveys, but not a room whose reflectors are detected everywhere.
+    paper = load_scenario("ipin2023")
+    assert paper.localization.detection_survey_poses > 0
+    assert radar_link(paper, RadarSensor(World.from_config(paper), paper.radar)).delivery is None
