@@ -359,4 +359,5 @@ def model_without(
         type_index=layout.type_index[keep],
         axes=layout.axes[keep],
     )
+    link = None if link is None else link.of_reflectors(keep)
     return FingerprintModel.for_world(replace(world, layout=reduced), cfg, link)

@@ -129,6 +129,11 @@ class RadarLink:
         target = np.clip(np.minimum(target, detection_probability), 0.05, None)
         return replace(self, delivery=target / detection_probability)
 
+    def of_reflectors(self, keep: np.ndarray) -> RadarLink:
+        """This link for the layout reduced to the reflectors ``keep`` (indices, layout
+        order): their survey's scaling kept, the others' dropped."""
+        return self if self.delivery is None else replace(self, delivery=self.delivery[keep])
+
     def detection_probability(
         self, rcs_m2: np.ndarray, dist_m: np.ndarray, cos_zenith: np.ndarray
     ) -> np.ndarray:

@@ -284,3 +284,19 @@ def test_a_reflector_masked_by_a_strong_scatterer_is_not_named_for_its_misses(wo
             mon.update(_estimate(xy), _gated(world, xy, drop=[2]), detections=det)
         named[excess_db] = mon.suspects
     assert named[10.0] == () and named[None] == (2,)
+
+
+def test_a_moved_reflector_is_named_in_a_room_with_an_obstacle():
+    """A room with a box needs the visibility model and its survey; naming a moved reflector
+    there rebuilds the model without it, survey and all (it crashed on the survey's shape)."""
+    box = {"min": [1.2, 1.2, 0.0], "max": [2.3, 2.8, 1.0]}  # inside the patrol loop
+    over = {
+        "room": {"obstacles": [box]},
+        "perturbations": {"displaced_reflector": {"severity": 1.0}},
+    }
+    env, named = _patrol(over, seed=0)
+    moved = set(env.perturbations["displaced_reflector"].moved.tolist())
+    assert set(named) == moved
+    model = env.localizer.model
+    assert sum(model.counts) == len(env.world.layout) - 1
+    assert model.link.delivery is not None and len(model.link.delivery) == sum(model.counts)

@@ -245,3 +245,25 @@ def test_a_survey_scales_each_reflector_down_to_its_delivered_rate_in_view():
     paper = load_scenario("ipin2023")
     assert paper.localization.detection_survey_poses > 0
     assert radar_link(paper, RadarSensor(World.from_config(paper), paper.radar)).delivery is None
+
+
+def test_a_model_without_a_suspect_keeps_the_others_survey():
+    """The reflector monitor's model without reflector 1, in a surveyed room: the kept
+    reflectors keep their survey's scaling, reflector 1's is dropped with it (it crashed on
+    the mismatched shapes when a suspect was named in a surveyed room)."""
+    from lrp_gym.localization.reflector_monitor import model_without
+
+    box = {"min": [0.8, 1.4, 0.0], "max": [2.2, 2.6, 1.0]}
+    cfg = load_scenario("ipin2023").with_overrides({"room": {"obstacles": [box]}})
+    world = World.from_config(cfg)
+    link = RadarLink.from_sensor(RadarSensor(world, cfg.radar))
+    surveyed = link.surveyed(np.array([0.2, 0.4, 0.6, 0.8]), 0.8)
+    reduced = model_without(world, cfg.localization, (1,), surveyed)
+    np.testing.assert_allclose(reduced.link.delivery, [0.25, 0.75, 1.0])
+    xy = np.array([[0.5, 0.5], [3.5, 3.5], [2.5, 1.0]])
+    full = FingerprintModel.for_world(world, cfg.localization, surveyed).visibility.exact
+    np.testing.assert_allclose(
+        reduced.visibility.exact.detection_probability(xy),
+        full.detection_probability(xy)[[0, 2, 3]],
+        rtol=1e-12,
+    )
