@@ -148,7 +148,7 @@ class _Bench:
         lut = LookupTable(world, loc.lut_resolution_m, loc.lut_grid_m, 0.0)
         lut_build_s = time.perf_counter() - t0
         sensor = RadarSensor(world, cfg.radar)
-        link = radar_link(cfg, sensor)  # and the opt-in survey: once, not per run
+        link = radar_link(cfg, sensor)  # and its survey: once, not per run
         amcl = Amcl(world, loc, link)
         args = (lut, lut_build_s, true_fingerprints, with_grid, link, amcl)
         return cls(cfg, loc, world, traj, sensor, *args)

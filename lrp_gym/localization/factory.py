@@ -39,7 +39,7 @@ def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
     loc = cfg.localization
     if loc.detection_survey_poses == 0 or not loc.reflector_visibility:
         return link
-    if not ReflectorVisibility.of(sensor.world, link).needed(sensor.world):
+    if not ReflectorVisibility.of(sensor.world, link).needed():
         return link
     rate = lrp_detection_rate(cfg, loc.detection_survey_poses, seed=0)
     return link.surveyed(rate.per_lrp_in_view_rate, loc.detection_probability)

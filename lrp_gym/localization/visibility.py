@@ -192,16 +192,16 @@ class ReflectorVisibility:
         """The model of ``world`` as a :class:`VisibilityMap`, or None when it is not
         :meth:`needed`."""
         vis = cls.of(world, link)
-        return VisibilityMap(vis, world.room.size_m[:2]) if vis.needed(world) else None
+        return VisibilityMap(vis, world.room.size_m[:2]) if vis.needed() else None
 
-    def needed(self, world: World) -> bool:
+    def needed(self) -> bool:
         """Whether some reflector is detected with probability below
-        :data:`SURE_DETECTION_PROBABILITY` from some free point of a 5 cm floor grid of
-        ``world`` (else there is nothing to model)."""
-        size = world.room.size_m
+        :data:`SURE_DETECTION_PROBABILITY` from some free point of a 5 cm floor grid of the
+        room (else there is nothing to model)."""
+        size = self.room.size_m
         axes = [np.arange(_SURVEY_GRID_M / 2, size[k], _SURVEY_GRID_M) for k in range(2)]
         xy = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 2)
-        xy = xy[world.room.free(xy)]
+        xy = xy[self.room.free(xy)]
         return len(xy) > 0 and self.detection_probability(xy).min() < SURE_DETECTION_PROBABILITY
 
     def detection_probability(self, xy: np.ndarray) -> np.ndarray:
