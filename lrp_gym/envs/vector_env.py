@@ -59,6 +59,11 @@ class LRPRadarNavVectorEnv(VectorEnv):
         As :class:`~lrp_gym.envs.nav_env.LRPRadarNavEnv`.
     render_mode : {"rgb_array"}, optional
         ``render()`` draws robot 0.
+    max_episode_steps : int, optional
+        A step limit on top of the scenario's ``task.max_episode_steps``, as
+        ``gym.make(id, max_episode_steps=N)`` adds gymnasium's ``TimeLimit`` to the single env
+        (``gym.make_vec`` passes it here): robot ``i`` is truncated after ``N`` steps of its
+        episode, with the flags the single env's ``TimeLimit`` gives.
     """
 
     metadata = {
@@ -77,7 +82,17 @@ class LRPRadarNavVectorEnv(VectorEnv):
         observation: str | None = None,
         task_mode: str | None = None,
         render_mode: str | None = None,
+        max_episode_steps: int | None = None,
     ) -> None:
+        if max_episode_steps is not None and (
+            isinstance(max_episode_steps, bool)
+            or not isinstance(max_episode_steps, int | np.integer)
+            or max_episode_steps < 1
+        ):
+            raise ValueError(
+                f"max_episode_steps must be a positive int or None, got {max_episode_steps!r}"
+            )
+        self.max_episode_steps = None if max_episode_steps is None else int(max_episode_steps)
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be 'rgb_array' or None, got {render_mode!r}")
         self.cfg = build_config(
@@ -136,6 +151,8 @@ class LRPRadarNavVectorEnv(VectorEnv):
         rewards[stepped] = out.reward
         terminated[stepped] = out.terminated
         truncated[stepped] = out.truncated
+        if self.max_episode_steps is not None:  # TimeLimit's flag: set even on a termination
+            truncated[stepped] |= self.core.steps[stepped] >= self.max_episode_steps
         infos: dict[str, Any] = {}
         for k, i in enumerate(stepped):
             info = self.core.info(

@@ -125,8 +125,7 @@ class LocalizationStack:
         self.converged = False
         self.monitor = monitor
         self.clutter_map = clutter_map
-        # The localiser's model of the surveyed map, and the models without suspected
-        # reflectors (keyed by the suspects; shared by spawned stacks: they are read-only).
+        # The surveyed map's models by the suspects they drop (read-only, shared by spawns).
         self._models: dict[tuple[int, ...], FingerprintModel] = {(): localizer.model}
 
     @classmethod
@@ -145,17 +144,13 @@ class LocalizationStack:
         the reflectors and its heading completes the table's position).
         """
         loc = cfg.localization
-        lut = (
-            LookupTable(world, loc.lut_resolution_m, loc.lut_grid_m)
-            if loc.method == "lut"
-            else None
-        )
+        lut = None
+        if loc.method == "lut":
+            lut = LookupTable(world, loc.lut_resolution_m, loc.lut_grid_m)
         tracker = LrpTracker.from_world(world, cfg.tracking)
         sensor = RadarSensor(world, cfg.radar)
-        monitor = None
-        if loc.reflector_monitor.enabled:
-            max_r = float(tracker.classifier.max_range_m)
-            monitor = ReflectorMonitor(world, loc.reflector_monitor, max_r)
+        mon, max_r = loc.reflector_monitor, float(tracker.classifier.max_range_m)
+        monitor = ReflectorMonitor(world, mon, max_r) if mon.enabled else None
         return cls(
             world,
             sensor,
@@ -312,11 +307,16 @@ class LocalizationStack:
         others = None if cmap is None else cmap.predicted_m(estimate.pose[:2])
         changed = monitor.update(estimate, gated, others, ego.speed_mps, detections)
         if changed and monitor.cfg.drop_suspects:
-            key, loc = monitor.suspects, self.localizer
-            if key not in self._models:
-                self._models[key] = model_without(self.world, loc.cfg, key, loc.model.link)
-            self.localizer.model = self._models[key]
+            self.drop_reflectors(monitor.suspects)
         return monitor.suspects
+
+    def drop_reflectors(self, suspects: tuple[int, ...]) -> None:
+        """Give the localiser the map without the reflectors ``suspects`` (layout indices;
+        ``()``: the full map), built from the full model whatever the current one drops."""
+        if suspects not in self._models:
+            link = self._models[()].link
+            self._models[suspects] = model_without(self.world, self.localizer.cfg, suspects, link)
+        self.localizer.model = self._models[suspects]
 
     # ------------------------------------------------------------------ internals
     def _with_lut(

@@ -30,12 +30,11 @@ def _assert_info_equal(vector_info: dict, i: int, info: dict) -> None:
         np.testing.assert_array_equal(vector_info[key][i], value, err_msg=key)
 
 
-@pytest.mark.parametrize("n", [1, 3, 8])
-def test_robot_i_is_the_single_env_seeded_seed_plus_i(n):
-    seed, steps = 20, 12 if n < 8 else 8
-    venv = gym.make_vec(ENV_ID, num_envs=n, overrides=SHORT)
+def _compare_with_single_envs(n: int, seed: int, steps: int, **make_kwargs) -> int:
+    """Step a batch of ``n`` and ``n`` single envs alike; assert equality; count autoresets."""
+    venv = gym.make_vec(ENV_ID, num_envs=n, **make_kwargs)
     assert isinstance(venv, LRPRadarNavVectorEnv)
-    envs = [gym.make(ENV_ID, overrides=SHORT) for _ in range(n)]
+    envs = [gym.make(ENV_ID, **make_kwargs) for _ in range(n)]
     obs, infos = venv.reset(seed=seed)
     for i, env in enumerate(envs):
         o, info = env.reset(seed=seed + i)
@@ -59,7 +58,26 @@ def test_robot_i_is_the_single_env_seeded_seed_plus_i(n):
             assert (rewards[i], terminated[i], truncated[i]) == (r, te, tr)
             _assert_info_equal(infos, i, info)
             ended[i] = te or tr
+    return autoresets
+
+
+@pytest.mark.parametrize("n", [1, 3, 8])
+def test_robot_i_is_the_single_env_seeded_seed_plus_i(n):
+    autoresets = _compare_with_single_envs(n, 20, 12 if n < 8 else 8, overrides=SHORT)
     assert autoresets >= n  # every robot went through at least one autoreset
+
+
+def test_max_episode_steps_truncates_as_the_single_envs_time_limit():
+    # gym.make adds TimeLimit(3) on top of the scenario's limit of 5; gym.make_vec passes
+    # max_episode_steps to the vector entry point, which must give the same flags.
+    autoresets = _compare_with_single_envs(2, 3, 9, overrides=SHORT, max_episode_steps=3)
+    assert autoresets >= 4
+    venv = gym.make_vec(ENV_ID, num_envs=1, max_episode_steps=2)
+    venv.reset(seed=0)
+    flags = [venv.step(np.zeros((1, 2)))[3][0] for _ in range(2)]
+    assert flags == [False, True]  # the robot at rest: only the limit ends the episode
+    with pytest.raises(ValueError, match="max_episode_steps"):
+        LRPRadarNavVectorEnv(1, max_episode_steps=0)
 
 
 def test_metadata_spaces_and_info_masks():

@@ -14,6 +14,7 @@ from lrp_gym.tracking.prior import DistancePrior
 from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world import OdometryNoise, noisy_odometry, odometry_delta
 from lrp_gym.world.trajectory import path_trajectory
+from lrp_gym.world.world import World
 
 
 def small_stack(cfg, world, measurements, map_aided):
@@ -133,3 +134,32 @@ def test_noisy_odometry_first_frame_draws_nothing():
     exact = OdometryNoise(0.0, 0.0)
     np.testing.assert_allclose(noisy_odometry(exact, prev, pose, rng), odometry_delta(prev, pose))
     assert rng.bit_generator.state != state  # a move draws, even at zero noise
+
+
+def test_a_second_suspect_drops_from_the_full_surveyed_map(paper_cfg):
+    """Reflectors dropped one after the other: each model comes from the full map, so the
+    survey's per-reflector scaling follows the layout indices (the second suspect crashed on
+    the first one's reduced survey)."""
+    from lrp_gym.localization.visibility import RadarLink
+
+    xy = [[0.9, 1.3], [3.8, 0.7], [4.3, 3.6], [1.6, 4.4], [2.5, 0.6], [0.7, 3.0]]
+    layout = [{"position": [x, y, 3.0], "type": "A"} for x, y in xy]
+    cfg = paper_cfg.with_overrides({"reflectors": {"layout": layout}})
+    world = World.from_config(cfg)
+    sensor = RadarSensor(world, cfg.radar)
+    rates = np.array([0.2, 0.3, 0.4, 0.5, 0.6, 0.7])
+    link = RadarLink.from_sensor(sensor).surveyed(rates, 0.8)
+    tracker = LrpTracker.from_world(world, cfg.tracking)
+    amcl = Amcl(world, cfg.localization, link)
+    stack = LocalizationStack(world, sensor, tracker, amcl, dt_s=0.25)
+    full = stack.localizer.model
+    stack.drop_reflectors((1,))
+    np.testing.assert_array_equal(
+        stack.localizer.model.link.delivery, link.delivery[[0, 2, 3, 4, 5]]
+    )
+    stack.drop_reflectors((1, 4))
+    model = stack.localizer.model
+    np.testing.assert_array_equal(model.link.delivery, link.delivery[[0, 2, 3, 5]])
+    assert sum(model.counts) == 4
+    stack.drop_reflectors(())
+    assert stack.localizer.model is full
