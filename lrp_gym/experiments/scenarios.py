@@ -5,7 +5,8 @@ obstacles, 1-3 reflector kinds (sometimes one more type in the catalogue that no
 uses), 3-8 reflectors between 1.5 m and the ceiling, a waveform of 0.5-4 GHz bandwidth with
 128-512 samples and 16-64 chirps whose range covers the room, and a 5-30 waypoint path whose
 legs keep the robot clear of walls and obstacles. ``small=True`` keeps rooms, paths, the radar
-frame and the particle count small enough for the test suite.
+frame and the particle count small enough for the test suite. :func:`random_perturbations`
+adds a random set of robustness perturbations at random severities.
 
 The result is built as a plain mapping and validated by :class:`~lrp_gym.config.ScenarioConfig`;
 a draw that the validator rejects is a bug of the generator or of the validator, so it raises.
@@ -18,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from lrp_gym.config import ScenarioConfig
+from lrp_gym.config.perturbations import PerturbationsConfig
 from lrp_gym.world.reflectors import REFLECTOR_KINDS
 from lrp_gym.world.room import Box, Room
 
@@ -72,6 +74,24 @@ def random_scenario(rng: np.random.Generator, *, small: bool = False) -> Scenari
             "lut_resolution_m": 0.1,
         }
     return ScenarioConfig.from_dict(data, data["name"])
+
+
+def random_perturbations(rng: np.random.Generator, share: float = 0.35) -> dict[str, Any]:
+    """A ``perturbations`` section: each known perturbation on with probability ``share``, at
+    a uniform severity (shadowing also with a random mode and count, kidnapping in a random
+    frame window)."""
+    out: dict[str, Any] = {}
+    for name in PerturbationsConfig.model_fields:
+        if rng.random() >= share:
+            continue
+        section: dict[str, Any] = {"severity": float(rng.uniform())}
+        if name == "shadowing":
+            section["mode"] = str(rng.choice(["static", "person"]))
+            section["reflectors"] = int(rng.integers(1, 4))
+        elif name == "kidnapping":
+            section["frames"] = [int(rng.integers(0, 5)), int(rng.integers(5, 30))]
+        out[name] = section
+    return out
 
 
 def _obstacles(rng: np.random.Generator, size: list[float], n: int) -> list[dict[str, Any]]:

@@ -2,7 +2,9 @@
 
 ``random_scenario`` covers rooms, obstacles, reflector catalogues (with unused types),
 waveforms and paths; each draw goes through reproduce-paper's machinery, every env variant and
-one pure-pursuit episode, with observations finite and inside the observation space.
+one pure-pursuit episode, with observations finite and inside the observation space. With
+``random_perturbations`` on top, draws also run through the vector env (both fidelities, both
+task modes, several robots, autoresets).
 """
 
 from __future__ import annotations
@@ -16,10 +18,11 @@ from hypothesis import strategies as st
 import lrp_gym  # noqa: F401  (registers the env ids)
 from agents.registry import make_agent
 from lrp_gym.config import ScenarioConfig
+from lrp_gym.config.perturbations import PerturbationsConfig
 from lrp_gym.envs import ENV_VARIANTS
 from lrp_gym.experiments.episodes import run_episode
 from lrp_gym.experiments.reproduce import reproduce
-from lrp_gym.experiments.scenarios import random_scenario
+from lrp_gym.experiments.scenarios import random_perturbations, random_scenario
 
 SEEDS = st.integers(0, 2**32 - 1)
 
@@ -47,6 +50,66 @@ def run_chain(cfg: ScenarioConfig, seed: int, *, steps: int = 2, episode_env: st
             res = run_episode(env, make_agent("pure-pursuit", env), seed)
             assert res.steps >= 1 and np.all(np.isfinite(res.loc_error_m))
         env.close()
+
+
+def random_localization(rng: np.random.Generator) -> dict:
+    """Localiser settings a user may pick: method, what it weighs, its start, the clutter map."""
+    loc = {
+        "method": str(rng.choice(["amcl", "amcl", "lut", "grid"])),
+        "measurements": str(rng.choice(["detections", "tracks"])),
+        "recovery_measurements": str(rng.choice(["detections", "tracks"])),
+        "init": str(rng.choice(["uniform", "uniform", "gaussian"])),
+        "estimator": str(rng.choice(["cluster", "best_k"])),
+        "slip_adaptive": bool(rng.random() < 0.3),
+        "clutter_map": {"enabled": bool(rng.random() < 0.3)},
+    }
+    if loc["method"] == "grid":  # coarse cells: a 12 m room at the default 5 cm is slow
+        loc.update(grid_cell_m=0.15, grid_cell_deg=15.0)
+    return loc
+
+
+def run_perturbed_batch(seed: int, *, small: bool, steps: int) -> None:
+    """A random scenario with random perturbations, radar fidelity, task mode, localiser,
+    observation and batch size, through the vector env for ``steps`` random steps (episodes of at most 40 steps)."""
+    rng = np.random.default_rng(seed)
+    data = random_scenario(rng, small=small).to_dict()
+    data["perturbations"] = random_perturbations(rng)
+    data["radar"]["fidelity"] = str(rng.choice(["signal", "detections"]))
+    data["task"].update(mode=str(rng.choice(["goal", "path"])), max_episode_steps=40)
+    data["localization"] = {**data.get("localization", {}), **random_localization(rng)}
+    data["env"] = {"observation": {"type": str(rng.choice(["estimated", "oracle"]))}}
+    cfg = ScenarioConfig.from_dict(data, f"perturbed draw {seed}")
+    n = int(rng.integers(1, 4))
+    venv = gym.make_vec("LRPRadarNav-v0", num_envs=n, scenario=cfg)
+    obs, _ = venv.reset(seed=seed)
+    for _ in range(steps):
+        obs, rewards, *_ = venv.step(rng.uniform(-1.0, 1.0, (n, 2)).astype(np.float32))
+        assert _finite_in_space(venv.observation_space, obs) and np.all(np.isfinite(rewards))
+    venv.close()
+
+
+def test_perturbation_draws_cover_every_kind_and_validate():
+    draws = [random_perturbations(np.random.default_rng(s)) for s in range(30)]
+    assert set().union(*draws) == set(PerturbationsConfig.model_fields)
+    assert {} in draws and max(map(len, draws)) >= 4
+    for d in draws:
+        assert set(PerturbationsConfig.model_validate(d).active()) == set(d)
+
+
+@settings(
+    max_examples=2, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow]
+)
+@given(seed=SEEDS)
+def test_a_small_perturbed_draw_runs_through_the_vector_env(seed):
+    run_perturbed_batch(seed, small=True, steps=12)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(40))
+def test_perturbed_scenarios_sweep(seed):
+    # Long enough for the reflector monitor to name suspects one after another (it crashed
+    # on a second suspect in a surveyed room) and for several autoresets.
+    run_perturbed_batch(seed, small=False, steps=150)
 
 
 def test_generator_is_seeded_and_covers_the_space():

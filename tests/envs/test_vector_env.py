@@ -30,9 +30,17 @@ def _assert_info_equal(vector_info: dict, i: int, info: dict) -> None:
         np.testing.assert_array_equal(vector_info[key][i], value, err_msg=key)
 
 
-def _compare_with_single_envs(n: int, seed: int, steps: int, **make_kwargs) -> int:
-    """Step a batch of ``n`` and ``n`` single envs alike; assert equality; count autoresets."""
-    venv = gym.make_vec(ENV_ID, num_envs=n, **make_kwargs)
+def _compare_with_single_envs(
+    n: int, seed: int, steps: int, max_episode_steps: int | None = None, **make_kwargs
+) -> int:
+    """Step a batch of ``n`` and ``n`` single envs alike; assert equality; count autoresets.
+
+    ``max_episode_steps`` goes to ``gym.make_vec``; the single envs apply Gymnasium's
+    ``TimeLimit`` rule here (truncated once ``max_episode_steps`` steps were taken, even on a
+    termination) rather than through ``gym.make``: importing rl_zoo3 (as the zoo tests do)
+    swaps ``gym.make``'s ``TimeLimit`` for a patched one with other flags and info keys.
+    """
+    venv = gym.make_vec(ENV_ID, num_envs=n, max_episode_steps=max_episode_steps, **make_kwargs)
     assert isinstance(venv, LRPRadarNavVectorEnv)
     envs = [gym.make(ENV_ID, **make_kwargs) for _ in range(n)]
     obs, infos = venv.reset(seed=seed)
@@ -42,6 +50,7 @@ def _compare_with_single_envs(n: int, seed: int, steps: int, **make_kwargs) -> i
         _assert_info_equal(infos, i, info)
     rng = np.random.default_rng(0)
     ended = np.zeros(n, dtype=bool)  # the single env's episode ended at the last step
+    elapsed = np.zeros(n, dtype=int)
     autoresets = 0
     for _ in range(steps):
         actions = _actions(rng, n)
@@ -51,9 +60,12 @@ def _compare_with_single_envs(n: int, seed: int, steps: int, **make_kwargs) -> i
                 # Next-step autoreset: the action is ignored, the next episode's first frame.
                 o, info = env.reset()
                 r, te, tr = 0.0, False, False
+                elapsed[i] = 0
                 autoresets += 1
             else:
                 o, r, te, tr, info = env.step(actions[i])
+                elapsed[i] += 1
+                tr = tr or (max_episode_steps is not None and elapsed[i] >= max_episode_steps)
             np.testing.assert_array_equal(obs[i], o)
             assert (rewards[i], terminated[i], truncated[i]) == (r, te, tr)
             _assert_info_equal(infos, i, info)
@@ -68,8 +80,8 @@ def test_robot_i_is_the_single_env_seeded_seed_plus_i(n):
 
 
 def test_max_episode_steps_truncates_as_the_single_envs_time_limit():
-    # gym.make adds TimeLimit(3) on top of the scenario's limit of 5; gym.make_vec passes
-    # max_episode_steps to the vector entry point, which must give the same flags.
+    # A limit of 3 on top of the scenario's 5; gym.make_vec passes max_episode_steps to the
+    # vector entry point, which must give TimeLimit's flags.
     autoresets = _compare_with_single_envs(2, 3, 9, overrides=SHORT, max_episode_steps=3)
     assert autoresets >= 4
     venv = gym.make_vec(ENV_ID, num_envs=1, max_episode_steps=2)
