@@ -270,6 +270,15 @@ class LocalizationConfig(Strict):
         "detection_probability gets its measured rate instead (never more: misses repeat "
         "along the path); 0: no survey",
     )
+    return_mix_survey_poses: Annotated[int, Field(ge=0)] = Field(
+        default=200,
+        description="radar frames at random free poses (fixed seed) from which the "
+        "structure_probability and ghost_probability are measured: the shares of the "
+        "tracker's RCS-window returns that come from the room's surfaces and from reflectors "
+        "via its faces (lrp_gym.localization.return_mix); used where the radar returns more "
+        "ghosts than ghost_probability (omnidirectional reflectors), else the set ones; "
+        "0: always as set",
+    )
     global_proposal: bool = Field(
         default=True,
         description="draw the global start and recovery particles from a map-wide grid of the "

@@ -24,7 +24,7 @@ import numpy as np
 
 from lrp_gym.config import LocalizationConfig, ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
-from lrp_gym.localization.factory import Localizer, make_localizer, radar_link
+from lrp_gym.localization.factory import Localizer, make_localizer, measured_mixture, radar_link
 from lrp_gym.localization.frame_result import FrameResult
 from lrp_gym.localization.lut import LookupTable
 from lrp_gym.localization.stack import LocalizationStack
@@ -140,7 +140,7 @@ class _Bench:
         cls, cfg: ScenarioConfig, estimator: str, true_fingerprints: bool, with_grid: bool
     ) -> _Bench:
         world = World.from_config(cfg)
-        loc = cfg.localization.model_copy(update={"estimator": estimator})
+        loc = measured_mixture(cfg).model_copy(update={"estimator": estimator})
         traj = path_trajectory(
             np.asarray(cfg.task.path), cfg.robot.max_speed_mps, cfg.task.frame_period_s
         )

@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import json
+
 from lrp_gym.config import LocalizationConfig, ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.grid import GridFilter
+from lrp_gym.localization.return_mix import return_mix
 from lrp_gym.localization.visibility import RadarLink, ReflectorVisibility
 from lrp_gym.radar.delivery_rate import lrp_detection_rate
 from lrp_gym.radar.sensor import RadarSensor
@@ -43,3 +46,48 @@ def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
         return link
     rate = lrp_detection_rate(cfg, loc.detection_survey_poses, seed=0)
     return link.surveyed(rate.per_lrp_in_view_rate, loc.detection_probability)
+
+
+def measured_mixture(cfg: ScenarioConfig) -> LocalizationConfig:
+    """``cfg``'s localisation settings with the structure and ghost probabilities measured
+    by :func:`~lrp_gym.localization.return_mix.return_mix` when
+    ``localization.return_mix_survey_poses`` asks for it and the radar returns more ghosts
+    than ``ghost_probability`` says (else as set).
+
+    Only up: where omnidirectional reflectors (spheres, Luneburg lenses) see the radar in
+    every face, two thirds of the returns are ghosts, and a model that expects a tenth lets
+    wrong poses explain them as reflectors (docs/trust.md, session 25). Where the radar
+    returns fewer ghosts than set (the paper room's trihedrals), the set mixture stays: the
+    measured one left the filter stuck on a wrong pose under unmapped clutter."""
+    loc = cfg.localization
+    if loc.return_mix_survey_poses == 0:
+        return loc
+    structure, ghost = _surveyed_probabilities(cfg)
+    if ghost <= loc.ghost_probability:
+        return loc
+    return loc.model_copy(update={"structure_probability": structure, "ghost_probability": ghost})
+
+
+#: Surveyed (structure, ghost) probabilities per survey inputs: every env of a scenario (each
+#: test, each evaluation) would otherwise repeat the same seeded frames.
+_MIXTURES: dict[str, tuple[float, float]] = {}
+
+
+def _surveyed_probabilities(cfg: ScenarioConfig) -> tuple[float, float]:
+    """:meth:`ReturnMix.map_return_probabilities` of ``cfg``'s survey, computed once per
+    process for the parts of the scenario it reads."""
+    key = json.dumps(
+        [
+            cfg.room.model_dump(mode="json"),
+            cfg.reflectors.model_dump(mode="json"),
+            cfg.radar.model_dump(mode="json"),
+            cfg.tracking.model_dump(mode="json"),
+            cfg.robot.model_dump(mode="json"),
+            cfg.localization.return_mix_survey_poses,
+        ],
+        sort_keys=True,
+    )
+    if key not in _MIXTURES:
+        mix = return_mix(cfg, cfg.localization.return_mix_survey_poses, seed=0)
+        _MIXTURES[key] = mix.map_return_probabilities()
+    return _MIXTURES[key]

@@ -29,7 +29,7 @@ import numpy as np
 
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.localization.clutter_map import ClutterMap
-from lrp_gym.localization.factory import Localizer, make_localizer, radar_link
+from lrp_gym.localization.factory import Localizer, make_localizer, measured_mixture, radar_link
 from lrp_gym.localization.frame_result import FrameResult
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.lut import LookupTable
@@ -155,7 +155,7 @@ class LocalizationStack:
             world,
             sensor,
             tracker,
-            make_localizer(world, loc, radar_link(cfg, sensor)),
+            make_localizer(world, measured_mixture(cfg), radar_link(cfg, sensor)),
             lut,
             dt_s=cfg.task.frame_period_s,
             measurements=loc.measurements,
