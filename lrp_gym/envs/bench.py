@@ -59,7 +59,10 @@ def bench_envs(cfg: ScenarioConfig, seconds: float) -> dict:
             "steps_per_s_random_actions": with_resets,
             "converged_particles": info["n_particles"],
         }
-    fixed = {**path_task, "localization": {"min_particles": 10000, "max_particles": 10000}}
+    # All three counts: a scenario that starts with fewer particles (a valid choice) would
+    # otherwise fail validation here, reported as an invalid user scenario.
+    n = {"initial_particles": 10000, "min_particles": 10000, "max_particles": 10000}
+    fixed = {**path_task, "localization": n}
     env = gym.make("LRPRadarNav-v0", scenario=cfg, overrides=fixed).unwrapped
     out["LRPRadarNav-v0 (fixed 10000 particles)"] = {
         "steps_per_s": converged_steps_per_s(env, seconds)

@@ -118,6 +118,26 @@ class PlacementProblem:
     def violation(self, xy_m: np.ndarray) -> np.ndarray:
         """How far layouts (..., M, 2) are from feasible, in metres (0 = feasible)."""
         xy_m = np.asarray(xy_m, dtype=float)
+        v = self._placement_violation(xy_m)
+        if self.use_constraint:
+            v = v + self._constraint_violation(xy_m)
+        return v
+
+    def feasible(self, xy_m: np.ndarray) -> np.ndarray:
+        """``violation(xy_m) == 0`` for layouts (n, M, 2), as a mask (n,).
+
+        The constraint (hundreds of checks with many same-type reflectors) is evaluated only
+        on the layouts that pass the cheap walls, spacing and obstacle tests: in a room where
+        hardly any layout is feasible, rejection sampling took minutes otherwise.
+        """
+        xy_m = np.asarray(xy_m, dtype=float)
+        ok = self._placement_violation(xy_m) == 0.0
+        if self.use_constraint and ok.any():
+            ok[ok] = self._constraint_violation(xy_m[ok]) == 0.0
+        return ok
+
+    def _placement_violation(self, xy_m: np.ndarray) -> np.ndarray:
+        """The walls, spacing and obstacle part of :meth:`violation`."""
         p = self.positions(xy_m)
         lo, hi = self.bounds()
         v = np.sum(np.maximum(lo - xy_m, 0) + np.maximum(xy_m - hi, 0), axis=(-1, -2))
@@ -128,10 +148,12 @@ class PlacementProblem:
             blo, bhi = box.min_m - self.wall_distance_m, box.max_m + self.wall_distance_m
             depth = np.min(np.minimum(p - blo, bhi - p), axis=-1)  # > 0 inside
             v = v + np.sum(np.maximum(depth, 0.0), axis=-1)
-        if self.use_constraint:
-            margin = constraint_margins(xy_m, self.type_index)
-            v = v + np.maximum(self.constraint_tolerance_m - margin, 0.0)
         return v
+
+    def _constraint_violation(self, xy_m: np.ndarray) -> np.ndarray:
+        """The constraint part of :meth:`violation` (only when ``use_constraint``)."""
+        margin = constraint_margins(xy_m, self.type_index)
+        return np.maximum(self.constraint_tolerance_m - margin, 0.0)
 
     def sample(self, rng: np.random.Generator, n: int, max_draws: int = 2_000_000) -> np.ndarray:
         """``n`` feasible layouts (n, M, 2), uniform in the bounds, by rejection (deterministic)."""
@@ -147,7 +169,7 @@ class PlacementProblem:
                 )
             xy = rng.uniform(lo, hi, size=(batch, self.n_reflectors, 2))
             drawn += batch
-            ok = xy[self.violation(xy) == 0.0]
+            ok = xy[self.feasible(xy)]
             out.append(ok[: n - have])
             have += len(out[-1])
         return np.concatenate(out)[:n]

@@ -104,3 +104,24 @@ def test_constraint_margins_vectorised_match_single():
     margins = constraint_margins(batch, types)
     for lay, m in zip(batch, margins, strict=True):
         assert check_constraint(lay, types, 0.0).margin_m == pytest.approx(m)
+
+
+def test_constraint_margins_equal_the_check_by_check_minimum():
+    # The margins are computed for all checks at once; each check alone, as before, gives the
+    # same minimum to the last bit (the layout search's sampling depends on it).
+    from lrp_gym.placement.symmetry import _line_distance, constraint_checks
+
+    rng = np.random.default_rng(9)
+    for types in ([0, 0, 0, 0], [0, 0, 1, 1], [0, 1, 0, 1, 2, 2, 0], [0, 0, 0, 0, 0, 0, 0, 0]):
+        xy = rng.uniform(0, 5, size=(40, len(types), 2))
+        want = np.full(40, np.inf)
+        for (i, j), (k, n), bisector in constraint_checks(types):
+            mid, q_mid = (xy[:, i] + xy[:, j]) / 2.0, (xy[:, k] + xy[:, n]) / 2.0
+            q_dir = xy[:, n] - xy[:, k]
+            want = np.minimum(want, _line_distance(mid, q_mid, q_dir))
+            if bisector:
+                normal = np.stack([-q_dir[:, 1], q_dir[:, 0]], axis=-1)
+                want = np.minimum(want, _line_distance(mid, q_mid, normal))
+        np.testing.assert_array_equal(constraint_margins(xy, np.array(types)), want)
+        np.testing.assert_array_equal(constraint_margins(xy[0], np.array(types)), want[0])
+    assert np.isinf(constraint_margins(rng.uniform(0, 5, (3, 3, 2)), np.array([0, 1, 2]))).all()

@@ -104,3 +104,48 @@ def test_cli_layout_bad_arguments_exit_2(args, flag):
     res = run("layout", "ipin2023", *args)
     assert res.returncode == 2
     assert flag in res.stderr and "Traceback" not in res.stderr
+
+
+def _crowded_problem(paper_cfg) -> PlacementProblem:
+    """Eight reflectors of one type in a 4 x 4.9 m room: 1 m spacing plus the constraint's
+    840 checks leave no feasible layout (a random scenario draw, seed 1 of the CLI fuzz)."""
+    data = paper_cfg.to_dict()
+    data["room"].update(size=[4.0, 4.9, 2.7], obstacles=[])
+    data["reflectors"]["layout"] = [
+        {"position": [0.5 + 0.4 * k, 0.5 + 0.5 * k, 2.0], "type": "A"} for k in range(8)
+    ]
+    data["robot"]["start_pose"] = [1.0, 2.0, 0.0]
+    data["task"]["path"] = [[1.0, 2.0], [1.5, 2.0]]
+    return PlacementProblem.from_config(type(paper_cfg).from_dict(data))
+
+
+def test_sampling_checks_the_constraint_only_where_the_rest_holds(paper_cfg, monkeypatch):
+    # Every draw went through the constraint: `lrp-gym layout --candidates 2` took three
+    # minutes to report that no layout is feasible. Only layouts that keep the walls, the
+    # spacing and the obstacles may reach it now.
+    from lrp_gym.errors import InputError
+    from lrp_gym.placement import search
+
+    problem = _crowded_problem(paper_cfg)
+    assert problem.use_constraint
+    checked = []
+    real = search.constraint_margins
+    monkeypatch.setattr(
+        search, "constraint_margins", lambda xy, t: checked.append(len(xy)) or real(xy, t)
+    )
+    with pytest.raises(InputError, match=r"placement: only 0 of 2 random layouts in 25600 draws"):
+        problem.sample(np.random.default_rng(0), 2, max_draws=25_600)
+    assert 0 < sum(checked) < 0.05 * 25_600
+
+
+def test_feasible_is_zero_violation(problem, paper_cfg):
+    rng = np.random.default_rng(2)
+    lo, hi = problem.bounds()
+    xy = np.concatenate([problem.sample(rng, 20), rng.uniform(lo, hi, (300, 4, 2))])
+    ok = problem.feasible(xy)
+    np.testing.assert_array_equal(ok, problem.violation(xy) == 0.0)
+    assert ok[:20].all() and not ok.all()
+    crowded = _crowded_problem(paper_cfg)
+    lo, hi = crowded.bounds()
+    xy = rng.uniform(lo, hi, (2000, 8, 2))
+    np.testing.assert_array_equal(crowded.feasible(xy), crowded.violation(xy) == 0.0)
