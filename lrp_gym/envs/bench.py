@@ -21,8 +21,7 @@ def converged_steps_per_s(
 ) -> float:
     """Steps per second after localisation has converged (resets excluded from the timing)."""
     env.reset(seed=seed)
-    for _ in range(warmup_steps):
-        env.step(_CIRCLE_ACTION)
+    _warm_up(env, warmup_steps)
     steps, elapsed = 0, 0.0
     while elapsed < seconds:
         t0 = time.perf_counter()
@@ -34,9 +33,17 @@ def converged_steps_per_s(
         elapsed += time.perf_counter() - t0
         if terminated or truncated:
             env.reset()
-            for _ in range(warmup_steps):
-                env.step(_CIRCLE_ACTION)
+            _warm_up(env, warmup_steps)
     return steps / elapsed
+
+
+def _warm_up(env: gym.Env, steps: int) -> None:
+    """``steps`` untimed circling steps, with a reset wherever an episode ends (in a small
+    room the circle may reach a wall; stepping an ended episode is an error)."""
+    for _ in range(steps):
+        _, _, terminated, truncated, _ = env.step(_CIRCLE_ACTION)
+        if terminated or truncated:
+            env.reset()
 
 
 def bench_envs(cfg: ScenarioConfig, seconds: float) -> dict:

@@ -54,7 +54,8 @@ def bench_amcl(cfg: ScenarioConfig, seconds: float) -> dict:
         od = odometry_delta(poses[k - 1], poses[k])
         fp = Fingerprint.from_true(world.layout, world.radar_position(poses[k, :2]))
         steps.append((od, fp))
-    amcl = Amcl(world, loc.model_copy(update={"initial_particles": 10000, "min_particles": 10000}))
+    fixed = {"initial_particles": 10000, "min_particles": 10000, "max_particles": 10000}
+    amcl = Amcl(world, loc.model_copy(update=fixed))
     amcl.reset(rng)
     ms_full = _time_updates(amcl, steps, seconds / 2.0, rng, fixed_n=10000)
     amcl = Amcl(world, loc)

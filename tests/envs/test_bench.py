@@ -15,3 +15,29 @@ def test_fixed_particle_row_runs_on_a_scenario_that_starts_with_fewer(paper_cfg,
     out = bench.bench_envs(cfg, 0.1)["variants"]
     assert list(out) == ["LRPRadarNav-v0 (fixed 10000 particles)"]
     assert out["LRPRadarNav-v0 (fixed 10000 particles)"]["steps_per_s"] > 0
+
+
+class _ShortEpisodes:
+    """An env whose episodes end every third step and that refuses a step after the end."""
+
+    def __init__(self) -> None:
+        self.t, self.ended, self.resets = 0, False, 0
+
+    def reset(self, seed=None):
+        self.t, self.ended = 0, False
+        self.resets += 1
+        return None, {}
+
+    def step(self, action):
+        assert not self.ended, "stepped an ended episode"
+        self.t += 1
+        self.ended = self.t % 3 == 0
+        return None, 0.0, self.ended, False, {}
+
+
+def test_converged_rate_never_steps_an_ended_episode():
+    # In a small room the circling robot reaches a wall within the warm-up: the warm-up
+    # stepped on after the episode's end (gymnasium warns; the env's state is undefined).
+    env = _ShortEpisodes()
+    assert bench.converged_steps_per_s(env, 0.01, warmup_steps=10) > 0
+    assert env.resets > 3
