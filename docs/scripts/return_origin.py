@@ -15,10 +15,8 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
 from lrp_gym.config import load_scenario
-from lrp_gym.experiments.scenarios import random_scenario
+from lrp_gym.experiments.scenarios import generated_room, reflector_kinds
 from lrp_gym.localization.return_mix import return_mix
 
 
@@ -31,11 +29,11 @@ def main() -> None:
     first, last = (int(v) for v in args.rooms.split("-"))
     over = {"radar": {"fidelity": args.fidelity}}
     named = [(name, load_scenario(name)) for name in ("ipin2023", "ipin2023-2types")]
-    rooms = [(f"room {s}", random_scenario(np.random.default_rng(s))) for s in range(first, last + 1)]
+    rooms = [(f"room {s}", generated_room(s)) for s in range(first, last + 1)]
     print("room | kinds | direct | ghost | structure | other | -> structure_p, ghost_p")
     for label, cfg in named + rooms:
         cfg = cfg.with_overrides(over)
-        kinds = "+".join(sorted({cfg.reflectors.types[r.type].kind for r in cfg.reflectors.layout}))
+        kinds = reflector_kinds(cfg)
         mix = return_mix(cfg, args.poses, seed=0)
         s, g = mix.map_return_probabilities()
         print(

@@ -29,7 +29,7 @@ from lrp_gym.experiments.episodes import (
     nav_env,
     summarize,
 )
-from lrp_gym.experiments.scenarios import random_scenario
+from lrp_gym.experiments.scenarios import generated_room, reflector_kinds
 from lrp_gym.localization.metrics import CONFIDENTLY_WRONG_M
 
 #: A room counts as confidently wrong when more than this share of its converged steps is.
@@ -71,8 +71,7 @@ def room_config(
     seed: int, overrides: dict[str, Any] | None = None, small: bool = False
 ) -> ScenarioConfig:
     """The room ``random_scenario(default_rng(seed))`` with ``overrides`` merged in."""
-    cfg = random_scenario(np.random.default_rng(seed), small=small)
-    return cfg.with_overrides(overrides) if overrides else cfg
+    return generated_room(seed, overrides, small=small)
 
 
 def run_rooms(
@@ -160,7 +159,7 @@ def run_room(
         size_m=(float(cfg.room.size[0]), float(cfg.room.size[1]), float(cfg.room.size[2])),
         obstacles=len(cfg.room.obstacles),
         reflectors=len(layout),
-        kinds="+".join(sorted({cfg.reflectors.types[r.type].kind for r in layout})),
+        kinds=reflector_kinds(cfg),
         env_id=env.spec.id if env.spec is not None else (env_id or ""),
         task=used.task.mode,
         fidelity=used.radar.fidelity,

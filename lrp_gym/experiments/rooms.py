@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from lrp_gym.experiments.reproduce import reproduce
-from lrp_gym.experiments.scenarios import random_scenario
+from lrp_gym.experiments.scenarios import generated_room, reflector_kinds
 
 
 @dataclass(frozen=True)
@@ -95,22 +95,19 @@ class RoomUnit:
 def room_result(u: RoomUnit) -> RoomResult:
     """AMCL on the room ``random_scenario(default_rng(u.seed))``, radar chain and true
     fingerprints (one room of :func:`sweep`)."""
-    cfg = random_scenario(np.random.default_rng(u.seed), small=u.small)
-    if u.overrides:
-        cfg = cfg.with_overrides(u.overrides)
+    cfg = generated_room(u.seed, u.overrides, small=u.small)
     radar = reproduce(
         cfg, runs=u.runs, seed=u.run_seed, estimator=u.estimator, localizer=u.localizer
     )
     true = reproduce(
         cfg, runs=u.runs, seed=u.run_seed, estimator=u.estimator, true_fingerprints=True
     )
-    kinds = sorted({cfg.reflectors.types[r.type].kind for r in cfg.reflectors.layout})
     return RoomResult(
         seed=int(u.seed),
         size_m=tuple(round(v, 2) for v in cfg.room.size),
         obstacles=len(cfg.room.obstacles),
         reflectors=len(cfg.reflectors.layout),
-        kinds="+".join(kinds),
+        kinds=reflector_kinds(cfg),
         frames=int(radar.amcl_errors_m.shape[1]),
         amcl_radar_m=float(radar.amcl_errors_m.mean()),
         amcl_true_m=float(true.amcl_errors_m.mean()),

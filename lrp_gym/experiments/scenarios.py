@@ -76,6 +76,20 @@ def random_scenario(rng: np.random.Generator, *, small: bool = False) -> Scenari
     return ScenarioConfig.from_dict(data, data["name"])
 
 
+def generated_room(
+    seed: int, overrides: dict[str, Any] | None = None, *, small: bool = False
+) -> ScenarioConfig:
+    """Generated room ``seed`` (``random_scenario(default_rng(seed))``, what ``--random-rooms``
+    runs) with the scenario ``overrides`` merged in."""
+    cfg = random_scenario(np.random.default_rng(seed), small=small)
+    return cfg.with_overrides(overrides) if overrides else cfg
+
+
+def reflector_kinds(cfg: ScenarioConfig) -> str:
+    """The reflector kinds a scenario's layout uses, sorted and joined by ``+``."""
+    return "+".join(sorted({cfg.reflectors.types[r.type].kind for r in cfg.reflectors.layout}))
+
+
 def random_perturbations(rng: np.random.Generator, share: float = 0.35) -> dict[str, Any]:
     """A ``perturbations`` section: each known perturbation on with probability ``share``, at
     a uniform severity (shadowing also with a random mode and count, kidnapping in a random
