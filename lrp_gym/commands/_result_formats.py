@@ -115,6 +115,16 @@ def _rooms(r: Any, _: Data) -> str:
     )
 
 
+def _rooms_trust(r: Any, _: Data) -> str:
+    p = r["pooled"]
+    return (
+        f"confidently wrong {100 * p['confidently_wrong_rate']:.1f} % of converged steps "
+        f"({r['wrong_converged_steps']} of {r['converged_steps']}); "
+        f"{r['rooms_confidently_wrong_over_1pct']} of {r['rooms']} rooms over 1 %; localised "
+        f"{100 * p['time_localised']:.1f} % of steps; {_pct(p['success_rate'])} success"
+    )
+
+
 def _trust_argv(scenario: str) -> tuple[str, ...]:
     return (
         "evaluate",

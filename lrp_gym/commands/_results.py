@@ -29,6 +29,7 @@ from lrp_gym.commands._result_formats import (
     _repro,
     _repro_met,
     _rooms,
+    _rooms_trust,
     _trust,
     _trust_argv,
     _trust_met,
@@ -102,6 +103,28 @@ ROWS: tuple[Row, ...] = (
         _trust_argv("ipin2023-2types"),
         _trust,
         _trust_met(0.97, 0.005),
+    ),
+    Row(
+        "rooms_trust",
+        "unknown start pose and heading (the default task) on 20 generated rooms, pure "
+        "pursuit, detections fidelity, 20 episodes each",
+        "confidently wrong <= 1 % (pooled)",
+        (
+            "evaluate",
+            "--random-rooms",
+            "20",
+            "--agent",
+            "pure-pursuit",
+            "--task",
+            "goal",
+            *DET,
+            "--episodes",
+            "20",
+            "--seed",
+            "7000",
+        ),  # fmt: skip
+        _rooms_trust,
+        lambda r, _: r["pooled"]["confidently_wrong_rate"] <= 0.01,
     ),
     Row(
         "random_rooms",
