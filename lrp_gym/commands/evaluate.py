@@ -21,7 +21,6 @@ from lrp_gym.commands._common import (
     check_output,
     choice,
     console,
-    err_console,
     fidelity_option,
     force_option,
     json_option,
@@ -33,7 +32,6 @@ from lrp_gym.commands._common import (
     scenario_argument,
     seed_option,
     sets_option,
-    table,
     write_json,
     wrote,
 )
@@ -82,7 +80,12 @@ def agent_settings(agent: str, items: list[str] | None) -> dict[str, Any]:
 def model_option() -> Any:
     """``--model`` (shared with robustness)."""
     return typer.Option(
-        None, "--model", metavar="FILE.zip", help="PPO model zip (default: the shipped one)."
+        None,
+        "--model",
+        metavar="FILE.zip",
+        help="PPO model zip (default: the shipped one): the shipped model or your own runs. "
+        "SB3 zips may hold pickles, which run code when loaded; lrp-gym reads them as plain "
+        "JSON and refuses a pickled value it cannot rebuild safely.",
     )
 
 
@@ -203,7 +206,9 @@ def evaluate(
         model_name = str(model or ev.DEFAULT_MODEL) if agent == "ppo" else None
         head = dict(agent=agent, sets=list(sets or []), agent_options=settings, model=model_name)
         factory = PolicyFactory(agent, model, seed, settings)
-        _random_rooms(random_rooms, factory, job, head, (out_path, plot_path), json_out)
+        from lrp_gym.commands._rooms_eval import random_rooms as run_rooms
+
+        run_rooms(random_rooms, factory, job, head, (out_path, plot_path), json_out)
         return
     with as_flags(env_id="--env"):
         env_obj = ep.make_eval_env(
@@ -275,98 +280,6 @@ def _check_random_rooms(n: int, gif_path: Path | None, ray: str | None) -> None:
     for flag, value in (("--gif", gif_path), ("--ray", ray)):
         if n and value is not None:
             raise InputError(f"{flag}: not with --random-rooms (run one scenario for it)")
-
-
-def _random_rooms(
-    n: int,
-    make_policy: PolicyFactory,
-    job: dict[str, Any],
-    head: dict[str, Any],
-    paths: tuple[Path | None, Path | None],
-    json_out: bool,
-) -> None:
-    """``--random-rooms``: ``job`` (``run_rooms``'s keywords) on rooms 0..n-1, a line per room
-    on stderr as it finishes, then the per-room table and the pooled numbers (``--json``: the
-    document ``head`` + the summary on stdout); ``paths``: ``--out`` and ``--plot``."""
-    from lrp_gym.experiments import room_episodes as rooms
-
-    flags = dict(model_path="--model", agent="--agent", env_id="--env", num_envs="--num-envs")
-    with as_flags(**flags):
-        results = rooms.run_rooms(range(n), make_policy, progress=_show_room, **job)
-    data = rooms.summary(results)
-    doc = head | dict(env_id=results[0].env_id, task=results[0].task, fidelity=results[0].fidelity)
-    doc |= dict(seed=job["seed"], episodes_per_room=job["episodes"]) | data
-    title = (
-        f"{doc['agent']} on {n} generated rooms ({doc['task']}, {doc['fidelity']}), "
-        f"seeds {job['seed']}..{job['seed'] + job['episodes'] - 1} in each"
-    )
-    out_path, plot_path = paths
-    if out_path is not None:
-        write_json(doc, out_path)
-    if json_out:
-        print_json(doc)
-    else:
-        _print_rooms(data, title)
-    if plot_path is not None:
-        from lrp_gym.localization.plotting import plot_reliability
-
-        fig = plot_reliability(
-            data["pooled"]["reliability"], title=f"Confidence reliability: {title}"
-        )
-        save_figure(fig, plot_path)
-    for p in paths:
-        if p is not None:
-            wrote(p, quiet=json_out)
-
-
-def _pct(share: float | None, unit: str = " %") -> str:
-    return "-" if share is None else f"{100 * share:.1f}{unit}"
-
-
-def _show_room(room: Any) -> None:
-    """One line on stderr as a generated room finishes."""
-    from lrp_gym.experiments.room_episodes import room_row
-
-    r = room_row(room)
-    err_console.print(
-        f"room {r['seed']}: {r['size_m'][0]:.1f} x {r['size_m'][1]:.1f} m, {r['obstacles']} "
-        f"obstacles, {r['reflectors']} reflectors ({r['kinds']}), {r['episodes']} episodes: "
-        f"success {_pct(r['success_rate'])}, confidently wrong "
-        f"{_pct(r['confidently_wrong_rate'])} of {r['converged_steps']} converged steps",
-        highlight=False,
-    )
-
-
-def _print_rooms(data: dict[str, Any], title: str) -> None:
-    """The ``--random-rooms`` table: one row per generated room, then the pooled numbers."""
-    t = table(
-        title,
-        ("room", "size [m]", "obst.", "refl.", "kinds", "success [%]", "coll. [%]",
-         "conv. [%]", "conf. wrong [%]", "wrong/conv."),
-    )  # fmt: skip
-    for r in data["per_room"]:
-        t.add_row(
-            str(r["seed"]),
-            f"{r['size_m'][0]:.1f} x {r['size_m'][1]:.1f}",
-            str(r["obstacles"]),
-            str(r["reflectors"]),
-            r["kinds"],
-            *(_pct(r[k], "") for k in ("success_rate", "collision_rate", "converged_share")),
-            _pct(r["confidently_wrong_rate"], ""),
-            f"{r['wrong_converged_steps']}/{r['converged_steps']}",
-        )
-    console.print(t)
-    p = data["pooled"]
-    console.print(
-        f"pooled over {p['episodes']} episodes in {data['rooms']} rooms: success "
-        f"{_pct(p['success_rate'])}, collisions {_pct(p['collision_rate'])}, localised "
-        f"{_pct(p['time_localised'])}, converged {_pct(p['converged_share'])}, confidently "
-        f"wrong {_pct(p['confidently_wrong_rate'])} ({data['wrong_converged_steps']}/"
-        f"{data['converged_steps']} converged steps), stuck {_pct(p['stuck_wrong_rate'])}; "
-        f"{data['rooms_confidently_wrong_over_1pct']} of {data['rooms']} rooms confidently "
-        "wrong over 1 %",
-        highlight=False,
-    )
 
 
 def _on_ray(factory, agent, seed, env, scenario, over, episodes, num_envs, show, run) -> dict:

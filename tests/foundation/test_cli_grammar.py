@@ -259,3 +259,12 @@ def test_radar_json_has_the_tables_columns(capsys):
     det = json.loads(out)["detections"]
     assert code == 0 and det
     assert set(det[0]) == {"range_m", "velocity_mps", "power_dbm", "rcs_dbsm", "snr_db"}
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_every_model_path_option_says_what_loading_a_model_runs(name):
+    """A model file (SB3 zip) may hold pickles, and unpickling runs code: every option that
+    takes one says so, and what lrp-gym does about it."""
+    for p in GROUP.commands[name].params:
+        if (getattr(p, "metavar", None) or "").lower().endswith(".zip"):
+            assert "pickle" in (p.help or ""), f"{name} {p.opts}: help does not mention pickles"
