@@ -8,18 +8,42 @@ spot, so no frame brings new evidence and the episode runs out its 200 steps.
     PYTHONPATH=$PWD .venv/bin/python docs/scripts/stuck_at_goal_trace.py
 """
 
-import gymnasium as gym, numpy as np
-import lrp_gym  # noqa
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+
+import lrp_gym  # noqa: F401  (registers the ids)
 from agents.pure_pursuit import PurePursuitPolicy
-over = {"perturbations": {"clutter": {"severity": 0.5}}, "localization": {"converged_mass": 0.99}}
-env = gym.make("LRPRadarNavFast-v0", task_mode="goal", overrides=over)
-policy = PurePursuitPolicy.from_env(env); base = env.unwrapped
-policy.reset(); obs, info = env.reset(seed=7380); done = False; k = 0
-goal = np.asarray(base.path.waypoints_m[-1])
-print("goal", goal)
-while not done and k < 40:
-    a = policy.act(obs)
-    obs, _, t, tr, info = env.step(a); done = t or tr; k += 1
-    if k >= 18 and k % 2 == 0:
-        est = np.asarray(info["est_pose"]); tru = np.asarray(info["true_pose"])
-        print(k, "action", np.round(a, 2), "est", np.round(est, 2), "true", np.round(tru, 2), "est->goal %.2f" % np.linalg.norm(est[:2]-goal), "true->goal %.2f" % np.linalg.norm(tru[:2]-goal))
+
+OVERRIDES = {
+    "perturbations": {"clutter": {"severity": 0.5}},
+    "localization": {"converged_mass": 0.99},
+}
+
+
+def main(seed: int = 7380, steps: int = 40) -> None:
+    env = gym.make("LRPRadarNavFast-v0", task_mode="goal", overrides=OVERRIDES)
+    policy = PurePursuitPolicy.from_env(env)
+    policy.reset()
+    obs, info = env.reset(seed=seed)
+    goal = np.asarray(env.unwrapped.path.waypoints_m[-1])
+    print("goal", np.round(goal, 2))
+    for k in range(1, steps + 1):
+        action = policy.act(obs)
+        obs, _, terminated, truncated, info = env.step(action)
+        est, true = np.asarray(info["est_pose"]), np.asarray(info["true_pose"])
+        if k >= 18 and k % 2 == 0:
+            print(
+                f"{k}: action {np.round(action, 2)}, estimate {np.round(est, 2)}, "
+                f"truth {np.round(true, 2)}, estimate to goal "
+                f"{np.linalg.norm(est[:2] - goal):.2f} m, truth to goal "
+                f"{np.linalg.norm(true[:2] - goal):.2f} m"
+            )
+        if terminated or truncated:
+            break
+    env.close()
+
+
+if __name__ == "__main__":
+    main()
