@@ -339,6 +339,12 @@ def _writable_dir(d: Path, flag: str, target: Path) -> None:
         raise InputError(f"{flag}: cannot write {target}: no write permission in {d}")
 
 
+def check_random_rooms(n: int) -> None:
+    """``--random-rooms N`` (reproduce-paper, evaluate): 0 is off, a negative count an error."""
+    if n < 0:
+        raise InputError(f"--random-rooms: must not be negative, got {n}")
+
+
 def check_distinct(*paths: Path | None) -> None:
     """Two outputs of one run must not be the same file."""
     seen: dict[Path, str] = {}

@@ -19,6 +19,7 @@ from lrp_gym.commands._common import (
     as_flags,
     check_distinct,
     check_output,
+    check_random_rooms,
     choice,
     console,
     fidelity_option,
@@ -275,8 +276,7 @@ def evaluate(
 
 def _check_random_rooms(n: int, gif_path: Path | None, ray: str | None) -> None:
     """``--random-rooms N``: not negative; no GIF and no Ray with it (checked before any work)."""
-    if n < 0:
-        raise InputError(f"--random-rooms: must not be negative, got {n}")
+    check_random_rooms(n)
     for flag, value in (("--gif", gif_path), ("--ray", ray)):
         if n and value is not None:
             raise InputError(f"{flag}: not with --random-rooms (run one scenario for it)")

@@ -12,6 +12,7 @@ from lrp_gym.commands._common import (
     FIDELITIES,
     check_distinct,
     check_output,
+    check_random_rooms,
     choice,
     console,
     err_console,
@@ -160,8 +161,7 @@ def _check_options(
     out_path = check_output(out, "--out", force, (".json",))
     plot_path = check_output(plot, "--plot", force, (".png", ".pdf", ".svg"))
     check_distinct(out_path, plot_path)
-    if random_rooms < 0:
-        raise InputError(f"--random-rooms: must not be negative, got {random_rooms}")
+    check_random_rooms(random_rooms)
     return out_path, plot_path
 
 

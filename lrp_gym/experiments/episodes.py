@@ -19,6 +19,7 @@ import gymnasium as gym
 import numpy as np
 
 import lrp_gym.envs  # noqa: F401  (registers the env ids)
+from lrp_gym.config import ScenarioConfig
 from lrp_gym.envs.nav_env import LRPRadarNavEnv
 from lrp_gym.localization.metrics import trust_metrics
 from lrp_gym.perturbations import PerturbationSet
@@ -57,7 +58,7 @@ def _frame(env: gym.Env) -> np.ndarray:
 def make_eval_env(
     agent: str,
     env_id: str | None = None,
-    scenario: str | None = None,
+    scenario: str | ScenarioConfig | None = None,
     render_mode: str | None = None,
     **env_kwargs: Any,
 ) -> gym.Env:

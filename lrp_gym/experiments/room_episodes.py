@@ -67,13 +67,6 @@ class RoomEpisodes:
     episodes: tuple[EpisodeResult, ...]
 
 
-def room_config(
-    seed: int, overrides: dict[str, Any] | None = None, small: bool = False
-) -> ScenarioConfig:
-    """The room ``random_scenario(default_rng(seed))`` with ``overrides`` merged in."""
-    return generated_room(seed, overrides, small=small)
-
-
 def run_rooms(
     room_seeds: Iterable[int],
     make_policy: Callable[[gym.Env], Policy],
@@ -122,7 +115,7 @@ def run_rooms(
     seeds = list(range(seed, seed + episodes))
     out = []
     for room_seed in room_seeds:
-        cfg = room_config(int(room_seed), overrides, small)
+        cfg = generated_room(int(room_seed), overrides, small=small)
         room = run_room(cfg, int(room_seed), make_policy, seeds, agent, env_id, num_envs)
         if progress is not None:
             progress(room)
@@ -141,9 +134,7 @@ def run_room(
 ) -> RoomEpisodes:
     """One room of :func:`run_rooms`: the episodes ``seeds`` in the room ``cfg`` (the draw of
     ``room_seed``, overrides merged in)."""
-    # make_eval_env passes ``scenario`` on to the env, which takes a validated config too.
-    env_kwargs: dict[str, Any] = {"scenario": cfg}
-    env = make_eval_env(agent, env_id, **env_kwargs)
+    env = make_eval_env(agent, env_id, scenario=cfg)
     try:
         try:
             policy = make_policy(env)
