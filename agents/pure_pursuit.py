@@ -11,7 +11,10 @@ straight ahead: consistent motion is what lets the particle filter resolve the h
 on the spot shows the radar nothing new). With ``avoid_walls_when_unsure`` and the room
 (:meth:`PurePursuitPolicy.from_env`) it creeps only where the floor ahead of the *estimated*
 pose is free for a few steps, and turns on the spot where it is not (off by default). When
-the lookahead point lies far to the side or behind, the robot turns on the spot.
+the lookahead point lies far to the side or behind, the robot turns on the spot. At its
+estimated goal in an episode that goes on (the env ends it when the true pose arrives), the
+estimate is wrong: the robot creeps on, as while the heading is unknown, to show the filter
+something new.
 
 It is a :class:`~lrp_gym.experiments.episodes.Policy` (``reset``, ``act``) and also exposes the
 Stable-Baselines3 ``predict`` signature.
@@ -31,6 +34,10 @@ from lrp_gym.world.room import Room
 #: While the heading is unknown, a creep step is taken only where the floor ahead of the
 #: estimated pose is free for this many steps (4 x 7.5 cm at the default creep speed).
 CREEP_LOOKAHEAD_STEPS = 4
+
+#: :meth:`PurePursuitPolicy.from_env` puts ``arrived_m`` at this share of the goal tolerance:
+#: deep enough inside that an estimate a few cm off does not trigger it.
+ARRIVED_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -60,7 +67,11 @@ class PurePursuitConfig:
     uncertain_heading_std_rad : float
         Heading std at and above which the robot only creeps.
     creep_speed_mps : float
-        Speed while the estimate is uncertain or not converged.
+        Speed while the estimate is uncertain (spread, heading or confidence).
+    min_confidence : float
+        The observation's localisation confidence below which the robot only creeps. 0.9, the
+        localiser's ``settled_mass``, not the 0.99 at which it reports ``converged``: creeping
+        until then timed out a fifth of the patrols under clutter (docs/trust.md, session 26).
     turn_in_place_rad : float
         Bearing of the lookahead point beyond which the robot turns on the spot.
     turn_gain : float
@@ -76,6 +87,14 @@ class PurePursuitConfig:
         margin, stays clear of walls and obstacles for :data:`CREEP_LOOKAHEAD_STEPS` creep steps
         ahead of the estimated pose, and turns on the spot elsewhere. Needs the room
         (:meth:`from_env`).
+    arrived_m : float
+        The env ends an episode when the *true* pose reaches the goal. An estimate within this
+        distance of the goal, with only the goal left among the upcoming waypoints, in an
+        episode that goes on is therefore wrong, by at least
+        ``goal_tolerance - arrived_m``: the robot creeps on (as while the heading is unknown)
+        to give the filter new evidence, instead of turning on the spot where it believes the
+        goal is. 0 turns the rule off. :meth:`from_env` sets it to half the env's goal
+        tolerance.
     """
 
     max_speed_mps: float = 2.0
@@ -91,10 +110,12 @@ class PurePursuitConfig:
     uncertain_std_m: float = 0.3
     uncertain_heading_std_rad: float = 0.5
     creep_speed_mps: float = 0.3
+    min_confidence: float = 0.9
     turn_in_place_rad: float = 1.2
     turn_gain: float = 3.0
     avoid_walls_when_unsure: bool = False
     creep_margin_m: float = 0.05
+    arrived_m: float = 0.0
 
 
 #: The settings a user may give (``lrp-gym evaluate --agent-option KEY=VALUE``): the robot
@@ -212,7 +233,7 @@ class PurePursuitPolicy:
             max_turn_rate_rps=float(lim.max_turn_rate_rps),
             max_reverse_mps=float(lim.max_reverse_mps),
             frame_period_s=float(base.cfg.task.frame_period_s),
-            **gains,
+            **{"arrived_m": ARRIVED_SHARE * float(base.cfg.task.goal_tolerance_m), **gains},
         )
         return cls(cfg, base.world.room, float(lim.radius_m))
 
@@ -243,13 +264,19 @@ class PurePursuitPolicy:
         # Speed limits: top speed, uncertainty, goal approach, bend.
         pos_std = float(np.max(std[:2]))
         frac = np.clip((c.uncertain_std_m - pos_std) / (c.uncertain_std_m - c.certain_std_m), 0, 1)
+        on_last_leg = bool(np.all(np.abs(waypoints - goal) < 1e-6))  # only the goal ahead
+        if goal_dist < c.arrived_m and on_last_leg:
+            # "Arrived" but the episode goes on: the estimate is wrong. Frames at one spot are
+            # weighed by the distance driven, so turning there would never correct it. (A
+            # patrol passes its goal on every lap: there the waypoints go on.)
+            return self._creep(obs[f["position"]], obs[f["heading"]])
         if std[2] >= c.uncertain_heading_std_rad:
             # Heading unknown: the bearing to the target is meaningless. Creep straight so the
             # filter sees consistent motion and can resolve the heading.
             if c.avoid_walls_when_unsure:
                 return self._creep(obs[f["position"]], obs[f["heading"]])
             return c.creep_speed_mps, 0.0
-        if obs[f["converged"]][0] < 0.5:
+        if obs[f["confidence"]][0] < c.min_confidence:
             frac = 0.0
         v = c.creep_speed_mps + frac * (c.max_speed_mps - c.creep_speed_mps)
         approach = max(c.approach_gain * goal_dist / c.frame_period_s, c.min_approach_speed_mps)

@@ -9,7 +9,8 @@ how far the confidence can be believed: the wrong share (> 0.3 m) of the steps i
 ``info["localization_confidence"]``, finer near 1 than ``lrp-gym evaluate``'s reliability bins.
 
     PYTHONPATH=$PWD .venv/bin/python docs/scripts/default_task_clutter.py --seeds 7100-7299 \
-        [--severity 0.5] [--env LRPRadarNav-v0] [--set localization.lost_alternative_drift_nats=null]
+        [--severity 0.5] [--env LRPRadarNav-v0] [--set localization.lost_alternative_drift_nats=null] \
+        [--agent-option arrived_m=0]
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import gymnasium as gym
 import numpy as np
 
 import lrp_gym  # noqa: F401  (registers the ids)
-from agents.pure_pursuit import PurePursuitPolicy
+from agents.pure_pursuit import PurePursuitPolicy, parse_options
 from lrp_gym.commands._common import overrides
 from lrp_gym.localization.metrics import reliability
 
@@ -53,13 +54,16 @@ def main() -> None:
     ap.add_argument("--severity", type=float, default=0.5, help="clutter severity (0: none)")
     ap.add_argument("--env", default="LRPRadarNavFast-v0", help="LRPRadarNav-v0: signal fidelity")
     ap.add_argument("--set", action="append", default=[], dest="sets", metavar="KEY=VALUE")
+    ap.add_argument(
+        "--agent-option", action="append", default=[], dest="agent_options", metavar="KEY=VALUE"
+    )
     args = ap.parse_args()
     first, last = (int(s) for s in args.seeds.split("-"))
     over = overrides(args.scenario, args.sets)
     if args.severity > 0.0:  # 0: the unperturbed task
         over.setdefault("perturbations", {})["clutter"] = {"severity": args.severity}
     env = gym.make(args.env, scenario=args.scenario, task_mode="goal", overrides=over)
-    policy = PurePursuitPolicy.from_env(env)
+    policy = PurePursuitPolicy.from_env(env, **parse_options(args.agent_options))
     total_conv = total_wrong = stuck = 0
     confidences, errors_m = [], []
     for seed in range(first, last + 1):

@@ -218,9 +218,9 @@ class Amcl:
         self.weights = w / total
         ess = effective_sample_size(self.weights)
         estimate = self._estimate(ess)
-        self._converged = estimate.converged
+        self._converged = estimate.settled
         if self.slip is not None:
-            self.slip.update(odometry, estimate.pose, estimate.converged)
+            self.slip.update(odometry, estimate.pose, estimate.settled)
         n = len(self.weights)
         self.n_injected = 0
         # The lost test asks for recovery particles too, once past its threshold.

@@ -44,7 +44,7 @@ from lrp_gym.localization.particle_statistics import (
     circular_variance_rad2,
     clusters,
 )
-from lrp_gym.localization.pose_estimate import PoseEstimate
+from lrp_gym.localization.pose_estimate import PoseEstimate, convergence_flags
 from lrp_gym.localization.visibility import RadarLink
 from lrp_gym.tracking.fingerprint import Fingerprint
 from lrp_gym.world.world import World
@@ -287,12 +287,11 @@ class GridFilter:
         # AMCL's spread of the cluster about its own mean, with the mass uniform in each cell.
         spread_m2 = max(float(w_n @ np.sum(xy[sel] ** 2, axis=1) - mean_xy @ mean_xy), 0.0)
         spread_m2 += self.cell_m**2 / 6.0
-        converged = bool(mass >= cfg.converged_mass and np.sqrt(spread_m2) < cfg.converged_std_m)
+        converged, settled = convergence_flags(mass, spread_m2, cfg)
         ess = 1.0 / float(np.sum(d * d))
         n_modes = int(np.count_nonzero(masses >= 0.05))
-        return PoseEstimate(
-            pose, self._covariance(pose), self._exposure()[2], ess, converged, mass, n_modes
-        )
+        cov, n_cells = self._covariance(pose), self._exposure()[2]
+        return PoseEstimate(pose, cov, n_cells, ess, converged, mass, n_modes, settled)
 
     def _covariance(self, pose: np.ndarray) -> np.ndarray:
         """Exact 3x3 covariance of the grid about ``pose`` (heading variance ``-2 ln R``), with

@@ -30,13 +30,17 @@ class PoseEstimate:
     ess : float
         Effective sample size before resampling (0 for the look-up table).
     converged : bool
-        Whether the localiser vouches for the estimate: its confidence reaches the configured
-        mass and the mode is tighter than the configured spread.
+        Whether the localiser vouches for the estimate: its confidence reaches
+        ``converged_mass`` and the mode is tighter than ``converged_std_m``.
     confidence : float
         Probability in [0, 1] that the estimate is right (for AMCL: the posterior mass of the
         estimate's mode, discounted by the probability that the particles have lost the robot).
     n_modes : int
         Number of distinct posterior modes holding at least 5 % of the mass (0 if unknown).
+    settled : bool
+        The looser flag the localiser's own consumers act on (clutter map, reflector
+        monitor, map-aided tracking, slip, lost test): confidence at least ``settled_mass``,
+        the same spread.
     """
 
     pose: np.ndarray
@@ -46,6 +50,7 @@ class PoseEstimate:
     converged: bool = False
     confidence: float = 0.0
     n_modes: int = 0
+    settled: bool = False
 
     @property
     def position_std_m(self) -> float:
@@ -93,6 +98,20 @@ def cloud_estimate(
     # the motion noise scatters away from the mode, and flicker while the error is ~1 cm.
     spread_m2 = max(float(w_n @ (sub[:, 0] ** 2 + sub[:, 1] ** 2) - mean_xy @ mean_xy), 0.0)
     confidence = mass * (1.0 - p_lost)
-    converged = bool(confidence >= cfg.converged_mass and np.sqrt(spread_m2) < cfg.converged_std_m)
+    converged, settled = convergence_flags(confidence, spread_m2, cfg)
     n_modes = int(np.count_nonzero(masses >= MODE_MASS))
-    return PoseEstimate(pose, cov, len(particles), ess, converged, float(confidence), n_modes)
+    return PoseEstimate(
+        pose, cov, len(particles), ess, converged, float(confidence), n_modes, settled
+    )
+
+
+def convergence_flags(
+    confidence: float, spread_m2: float, cfg: LocalizationConfig
+) -> tuple[bool, bool]:
+    """(``converged``, ``settled``) of an estimate whose mode has ``confidence`` and position
+    variance ``spread_m2`` (m^2): see :class:`PoseEstimate`."""
+    tight = bool(np.sqrt(spread_m2) < cfg.converged_std_m)
+    return (
+        tight and confidence >= cfg.converged_mass,
+        tight and confidence >= cfg.settled_mass,
+    )

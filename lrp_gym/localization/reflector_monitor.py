@@ -197,7 +197,7 @@ class ReflectorMonitor:
     ) -> MonitorFrame | None:
         """One frame's evidence, without adding it (see :meth:`update`); None when the
         frame judges no reflector (or is not converged)."""
-        if not estimate.converged:
+        if not estimate.settled:
             return None
         predicted, seen, bearing, rcs_m2 = self._geometry(estimate.pose[:2])
         if not seen.any():

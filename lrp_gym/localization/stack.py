@@ -81,8 +81,9 @@ class LocalizationStack:
     - the tracker's tracks (:class:`LrpTracker`) and the window test of its last frame;
     - the localiser's particles ``(P, 3)`` and weights ``(P,)`` (AMCL; a belief grid for the
       grid filter), its recovery averages and the predicted cloud of its last update;
-    - :attr:`converged`, whether the localiser's estimate of the previous frame had converged
-      (with ``tracks`` it decides whether the cloud may rank the tracks or only veto them);
+    - :attr:`converged` and :attr:`settled`, the previous frame's flags
+      (:class:`PoseEstimate`); ``settled``, with ``tracks``, decides whether the cloud may rank
+      the tracks or only veto them;
     - :attr:`sensor`, the radar of this episode (the surveyed layout, or a moved one);
     - the reflector monitor's statistics, and which map (without suspects) the localiser uses.
 
@@ -122,7 +123,8 @@ class LocalizationStack:
         self.measurements = measurements
         self.map_aided = map_aided
         self.use_ego = use_ego
-        self.converged = False
+        # The last frame's flags (PoseEstimate): reported, and acted on by the stack itself.
+        self.converged = self.settled = False
         self.monitor = monitor
         self.clutter_map = clutter_map
         # The surveyed map's models by the suspects they drop (read-only, shared by spawns).
@@ -176,7 +178,7 @@ class LocalizationStack:
         new.tracker.reset()
         new.localizer = self.localizer.spawn()
         new.localizer.model = self._models[()]
-        new.converged = False
+        new.converged = new.settled = False
         if self.monitor is not None:
             new.monitor = replace(self.monitor)  # fresh statistics (see __post_init__)
         new.clutter_map = self.clutter_map and replace(self.clutter_map)  # no points yet
@@ -197,7 +199,7 @@ class LocalizationStack:
         self.tracker.reset()
         self.localizer.model = self._models[()]
         self.localizer.reset(rng, known_pose)
-        self.converged = False
+        self.converged = self.settled = False
         self.sensor = self.surveyed_sensor
         if self.monitor is not None:
             self.monitor.reset()
@@ -286,7 +288,7 @@ class LocalizationStack:
         else:
             detections = frame
             fingerprint, estimate = self._track_and_localize(frame, ego, rng)
-        self.converged = bool(estimate.converged)
+        self.converged, self.settled = bool(estimate.converged), bool(estimate.settled)
         suspects = () if detections is None else self._check_reflectors(estimate, ego, detections)
         t1 = time.perf_counter()
         lut_estimate, pose_estimate = self._with_lut(fingerprint, estimate)
@@ -328,7 +330,8 @@ class LocalizationStack:
         lut_est = self.lut.query(fingerprint)
         pose = np.array([*lut_est.pose[:2], estimate.pose[2]])  # the table knows no heading
         conv = lut_est.converged
-        return lut_est, PoseEstimate(pose, lut_est.covariance, 0, 0.0, conv, float(conv), 1)
+        consumer = PoseEstimate(pose, lut_est.covariance, 0, 0.0, conv, float(conv), 1, conv)
+        return lut_est, consumer
 
     def _prior(
         self, particles_xy: np.ndarray, weights: np.ndarray, confident: bool
@@ -360,11 +363,11 @@ class LocalizationStack:
                 recovery=own_fit,
                 speed_mps=ego.speed_mps,
             )
-            # This frame's posterior; it ranks the tracks only once converged (right after a
+            # This frame's posterior; it ranks the tracks only once settled (right after a
             # global start its heaviest mode may be a mirror image).
             prior = None
             if self.map_aided:
-                prior = self._prior(loc.particles[:, :2], loc.weights, estimate.converged)
+                prior = self._prior(loc.particles[:, :2], loc.weights, estimate.settled)
             fingerprint = tracker.update(detections, self.dt_s, tracker_ego, prior, window)
             self._learn_clutter(estimate, gated)
         else:
@@ -372,7 +375,7 @@ class LocalizationStack:
             prior = None
             if self.map_aided:
                 moved = apply_odometry(loc.particles, odometry)
-                prior = self._prior(moved[:, :2], loc.weights, self.converged)
+                prior = self._prior(moved[:, :2], loc.weights, self.settled)
             fingerprint = tracker.update(detections, self.dt_s, tracker_ego, prior)
             weighed = self._declutter(fingerprint, odometry)
             estimate = loc.update(
@@ -386,7 +389,7 @@ class LocalizationStack:
                 self._declutter(tracker.persistent_fingerprint(max_misses=0), odometry)
             )
         if self.clutter_map is not None:  # after every use of the previous frame's pose
-            self.clutter_map.follow(estimate.pose, estimate.converged, odometry)
+            self.clutter_map.follow(estimate.pose, estimate.settled, odometry)
         return fingerprint, estimate
 
     def _declutter(self, fingerprint: Fingerprint, odometry: np.ndarray) -> Fingerprint:
@@ -395,6 +398,6 @@ class LocalizationStack:
         return fingerprint if cmap is None else cmap.declutter(fingerprint, odometry)
 
     def _learn_clutter(self, est: PoseEstimate, gated: Fingerprint) -> None:
-        """The clutter map learns from this frame on a converged estimate."""
-        if (cmap := self.clutter_map) is not None and est.converged:
+        """The clutter map learns from this frame on a settled estimate."""
+        if (cmap := self.clutter_map) is not None and est.settled:
             cmap.update(est.pose[:2], gated, self.localizer.model.map_return_ranges)

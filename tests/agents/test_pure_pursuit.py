@@ -152,3 +152,51 @@ def test_predict_scales_a_reverse_speed_by_the_reverse_limit():
     pol.control = lambda obs: (-0.1, 0.0)  # a controller that backs off at 0.1 m/s
     action, _ = pol.predict(np.zeros(16))
     assert action[0] == pytest.approx(-0.5)  # the env multiplies by max_reverse_mps
+
+
+def test_at_the_estimated_goal_in_an_episode_that_goes_on_the_robot_creeps_on():
+    """The env ends an episode when the true pose reaches the goal, so an agent asked to act
+    while its estimate sits on the goal knows the estimate is wrong. Turning on the spot there
+    adds no evidence (frames are weighed by the distance driven): it creeps on instead."""
+    from lrp_gym.world.room import Room
+
+    path = WaypointPath.from_points(np.array([[1.0, 1.0], [3.0, 1.0]]))
+    room = Room(size_m=np.array([5.0, 5.0, 4.0]), obstacles=())
+    on = PurePursuitPolicy(PurePursuitConfig(arrived_m=0.125), room, 0.2)
+    off = PurePursuitPolicy(PurePursuitConfig(arrived_m=0.0), room, 0.2)
+    c = on.config
+    # Estimate 5 cm short of the goal, facing away from it: the old rule turns to face it.
+    at_goal = _obs([2.95, 1.0, np.pi], path)
+    assert on.control(at_goal) == pytest.approx((c.creep_speed_mps, 0.0))
+    speed, turn = off.control(at_goal)
+    assert speed == 0.0 and abs(turn) > 0.0
+    # 0.2 m short (outside arrived_m): the approach is unchanged.
+    approach = _obs([2.8, 1.0, 0.0], path)
+    assert on.control(approach) == pytest.approx(off.control(approach))
+    # A goal 0.4 m from the wall, facing it: the creep turns on the spot (the room's clearance).
+    by_wall = WaypointPath.from_points(np.array([[1.0, 4.6], [3.0, 4.6]]))
+    speed, turn = on.control(_obs([2.95, 4.6, 0.5 * np.pi], by_wall))
+    assert speed == 0.0 and turn == pytest.approx(0.5 * c.max_turn_rate_rps)
+
+
+def test_from_env_puts_the_arrival_rule_inside_the_goal_tolerance():
+    import gymnasium as gym
+
+    from agents.pure_pursuit import ARRIVED_SHARE
+
+    env = gym.make("LRPRadarNavFast-v0")
+    tol = env.unwrapped.cfg.task.goal_tolerance_m
+    assert PurePursuitPolicy.from_env(env).config.arrived_m == pytest.approx(ARRIVED_SHARE * tol)
+    assert 0.0 < ARRIVED_SHARE < 1.0
+    assert PurePursuitPolicy.from_env(env, arrived_m=0.0).config.arrived_m == 0.0
+    env.close()
+
+
+def test_a_patrol_passing_its_goal_mid_lap_is_not_arrived():
+    """A patrol's goal lies on every lap: with waypoints still ahead, the robot follows them."""
+    lap = np.array([[1.0, 1.0], [3.0, 1.0], [3.0, 3.0], [1.0, 3.0], [1.0, 1.0]])
+    path = WaypointPath.from_points(np.vstack([lap, lap[1:]]))  # two laps, goal = start
+    on = PurePursuitPolicy(PurePursuitConfig(arrived_m=0.125))
+    off = PurePursuitPolicy(PurePursuitConfig(arrived_m=0.0))
+    passing = _obs([1.0, 1.05, -0.5 * np.pi], path)  # 5 cm before the goal point, lap one
+    assert on.control(passing) == pytest.approx(off.control(passing))

@@ -192,11 +192,14 @@ def test_converged_means_one_tight_mode(room):
     amcl = Amcl(world, loc)
     blob = np.array([2.0, 2.0, 0.0]) + rng.normal(0.0, [0.07, 0.07, 0.1], (2000, 3))
     assert _set(amcl, blob).converged  # sqrt(trace) 0.1 m, one mode
-    # A sprinkle of uniformly drawn particles (as injected by the recovery) does not
-    # un-converge it, although it inflates the whole-set spread far beyond the threshold.
+    # A sprinkle of uniformly drawn particles (as injected by the recovery) leaves it
+    # settled, although it inflates the whole-set spread far beyond the threshold; the
+    # reported claim (converged_mass 0.99) holds with a sprinkle of 0.5 %, not of 5 %.
     stray = amcl.uniform_particles(100, rng)
     est = _set(amcl, np.vstack([blob, stray]))
-    assert est.converged and est.position_std_m > loc.converged_std_m
+    assert est.settled and est.position_std_m > loc.converged_std_m
+    assert not est.converged and loc.converged_mass > est.confidence
+    assert _set(amcl, np.vstack([blob, stray[:10]])).converged
     # Two equally heavy modes 2 m apart: not converged, whatever each one's spread.
     other = blob + np.array([2.0, 0.5, 0.0])
     assert not _set(amcl, np.vstack([blob, other])).converged
@@ -285,9 +288,10 @@ def test_kidnap_recovery_with_the_lost_test_every_8_frames(room, monkeypatch):
 
 def _wrong_frames_after_kidnap(seed: int, overrides: dict) -> tuple[int, int]:
     """After a >= 3 m kidnap (patrol, pure pursuit, detections fidelity): the frames the
-    estimate stays converged more than 0.3 m off from the kidnap on (on the old pose, before
-    the lost test notices), and all converged frames more than 0.3 m off within 15 frames
-    (a restart may also settle on a wrong mode for a while)."""
+    estimate stays settled more than 0.3 m off from the kidnap on (on the old pose, before
+    the lost test notices), and all settled frames more than 0.3 m off within 15 frames
+    (a restart may also settle on a wrong mode for a while). Settled, not converged: the
+    filter's own flag (0.9) shows the lost test's delay; the reported one (0.99) hides it."""
     from agents.registry import make_agent
     from lrp_gym.config import deep_merge
     from lrp_gym.experiments.episodes import make_eval_env
@@ -304,7 +308,7 @@ def _wrong_frames_after_kidnap(seed: int, overrides: dict) -> tuple[int, int]:
         if kidnap is None and base.perturbations["kidnapping"].kidnap_frame is not None:
             kidnap = t
         if kidnap is not None:
-            flags.append(bool(base.estimate.converged and info["position_error_m"] > 0.3))
+            flags.append(bool(base.estimate.settled and info["position_error_m"] > 0.3))
             if t - kidnap >= 14:
                 break
         if terminated or truncated:

@@ -24,8 +24,10 @@ def world():
     return World.from_config(load_scenario("ipin2023"))
 
 
-def _estimate(xy, converged=True):
-    return PoseEstimate(np.array([*xy, 0.0]), np.eye(3) * 1e-4, 500, 400.0, converged, 1.0, 1)
+def _estimate(xy, settled=True):
+    """A tight estimate at ``xy``; the monitor learns on ``settled`` frames only."""
+    pose, cov = np.array([*xy, 0.0]), np.eye(3) * 1e-4
+    return PoseEstimate(pose, cov, 500, 400.0, settled, float(settled), 1, settled)
 
 
 def _gated(world, xy, drop=()):
@@ -162,12 +164,17 @@ def test_the_common_share_leaves_out_suspects_and_frames_without_peers(world):
     assert mon.null_var[0] == 0.0 and mon.suspects == ()
 
 
-def test_frames_without_a_converged_estimate_are_not_judged(world):
+def test_frames_without_a_settled_estimate_are_not_judged(world):
     mon = ReflectorMonitor(world, CFG, max_range_m=20.0)
     xy = _visible_xy(world, mon, np.random.default_rng(1))
     for _ in range(50):
-        mon.update(_estimate(xy, converged=False), _gated(world, xy, drop=[0, 1, 2, 3]))
+        mon.update(_estimate(xy, settled=False), _gated(world, xy, drop=[0, 1, 2, 3]))
     assert mon.suspects == () and not mon.visible_frames.any()
+    # Settled (confidence 0.95) but short of the reported claim (converged_mass 0.99): judged.
+    pose, cov = np.array([*xy, 0.0]), np.eye(3) * 1e-4
+    settled = PoseEstimate(pose, cov, 500, 400.0, False, 0.95, 1, True)
+    mon.update(settled, _gated(world, xy))
+    assert mon.visible_frames.any()
 
 
 def test_out_of_range_reflectors_are_not_expected(world):
