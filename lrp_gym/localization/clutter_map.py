@@ -41,7 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from lrp_gym.config.localization import ClutterMapConfig
+from lrp_gym.config.room_changes import ClutterMapConfig
 from lrp_gym.localization.point_fit import (
     cross_spread_m,
     fit_point,

@@ -52,7 +52,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from lrp_gym.config.localization import LocalizationConfig, ReflectorMonitorConfig
+from lrp_gym.config.localization import LocalizationConfig
+from lrp_gym.config.room_changes import ReflectorMonitorConfig
 from lrp_gym.localization.displacement_glrt import DisplacementGlrt
 from lrp_gym.localization.displacement_test import DisplacementTest
 from lrp_gym.localization.likelihood import FingerprintModel

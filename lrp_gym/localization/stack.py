@@ -81,9 +81,8 @@ class LocalizationStack:
     - the tracker's tracks (:class:`LrpTracker`) and the window test of its last frame;
     - the localiser's particles ``(P, 3)`` and weights ``(P,)`` (AMCL; a belief grid for the
       grid filter), its recovery averages and the predicted cloud of its last update;
-    - :attr:`converged` and :attr:`settled`, the previous frame's flags
-      (:class:`PoseEstimate`); ``settled``, with ``tracks``, decides whether the cloud may rank
-      the tracks or only veto them;
+    - :attr:`converged` and :attr:`settled`, the previous frame's flags; ``settled``, with
+      ``tracks``, decides whether the cloud may rank the tracks or only veto them;
     - :attr:`sensor`, the radar of this episode (the surveyed layout, or a moved one);
     - the reflector monitor's statistics, and which map (without suspects) the localiser uses.
 
@@ -123,8 +122,7 @@ class LocalizationStack:
         self.measurements = measurements
         self.map_aided = map_aided
         self.use_ego = use_ego
-        # The last frame's flags (PoseEstimate): reported, and acted on by the stack itself.
-        self.converged = self.settled = False
+        self.converged = self.settled = False  # the last frame's flags (PoseEstimate)
         self.monitor = monitor
         self.clutter_map = clutter_map
         # The surveyed map's models by the suspects they drop (read-only, shared by spawns).
@@ -329,9 +327,8 @@ class LocalizationStack:
             return None, estimate
         lut_est = self.lut.query(fingerprint)
         pose = np.array([*lut_est.pose[:2], estimate.pose[2]])  # the table knows no heading
-        conv = lut_est.converged
-        consumer = PoseEstimate(pose, lut_est.covariance, 0, 0.0, conv, float(conv), 1, conv)
-        return lut_est, consumer
+        c = lut_est.converged
+        return lut_est, PoseEstimate(pose, lut_est.covariance, 0, 0.0, c, float(c), 1, c)
 
     def _prior(
         self, particles_xy: np.ndarray, weights: np.ndarray, confident: bool
