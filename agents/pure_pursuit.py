@@ -10,7 +10,7 @@ out). While the heading is unknown the bearing to any target is meaningless, so 
 straight ahead: consistent motion is what lets the particle filter resolve the heading (a turn
 on the spot shows the radar nothing new). With ``avoid_walls_when_unsure`` and the room
 (:meth:`PurePursuitPolicy.from_env`) it creeps only where the floor ahead of the *estimated*
-pose is free for a few steps, and turns on the spot where it is not (on by default). When
+pose is free for a few steps, and turns on the spot where it is not (off by default). When
 the lookahead point lies far to the side or behind, the robot turns on the spot. At its
 estimated goal in an episode that goes on (the env ends it when the true pose arrives), the
 estimate is wrong: the robot creeps on, as while the heading is unknown, to show the filter
@@ -77,13 +77,11 @@ class PurePursuitConfig:
     turn_gain : float
         Turn rate per radian of bearing when turning on the spot (1/s).
     avoid_walls_when_unsure : bool
-        On by default (since session 26): while the heading is unknown, creep only where the
-        floor ahead of the estimated pose is free (``creep_margin_m``), and turn on the spot
-        elsewhere. It removed every crash of the patrols' clutter and kidnap cells. Off
-        before: it costs evidence (turns weigh nothing) and, with the claim at confidence
-        0.9, made the default task under clutter more often confidently wrong; at 0.99 it
-        does not (docs/trust.md, "The crashes were blind creeps", session 26). False: creep
-        blind.
+        Off by default. On: while the heading is unknown, creep only where the floor ahead of
+        the estimated pose is free (``creep_margin_m``), and turn on the spot elsewhere. It
+        removed nearly every crash of the patrol matrix but costs evidence (turns weigh
+        nothing) and made the default task under clutter more often confidently wrong
+        (docs/trust.md, "The crashes were blind creeps").
     creep_margin_m : float
         With ``avoid_walls_when_unsure``: the robot creeps only where its disc, widened by this
         margin, stays clear of walls and obstacles for :data:`CREEP_LOOKAHEAD_STEPS` creep steps
@@ -115,7 +113,7 @@ class PurePursuitConfig:
     min_confidence: float = 0.9
     turn_in_place_rad: float = 1.2
     turn_gain: float = 3.0
-    avoid_walls_when_unsure: bool = True
+    avoid_walls_when_unsure: bool = False
     creep_margin_m: float = 0.05
     arrived_m: float = 0.0
 

@@ -141,12 +141,10 @@ def test_a_blind_creep_stops_short_of_the_wall_ahead_of_the_estimate():
     # The same at the obstacle's face (x = 2), towards it and away from it.
     assert act([2.0 - edge - reach + 0.01, 2.5, 0.0]) == pytest.approx(turn)
     assert act([2.0 - edge - 0.01, 2.5, np.pi]) == pytest.approx(creep)
-    # Without the room, or with the option off, the creep is blind; on is the default.
+    # Without the room, or with the option off (the default), the creep is blind, as before.
     assert act([edge + 0.01, 1.0, np.pi], PurePursuitPolicy()) == pytest.approx(creep)
-    off = PurePursuitPolicy(PurePursuitConfig(avoid_walls_when_unsure=False), room, radius)
-    assert act([edge + reach - 0.01, 1.0, np.pi], off) == pytest.approx(creep)
     default = PurePursuitPolicy(room=room, robot_radius_m=radius)
-    assert act([edge + reach - 0.01, 1.0, np.pi], default) == pytest.approx(turn)
+    assert act([edge + reach - 0.01, 1.0, np.pi], default) == pytest.approx(creep)
 
 
 def test_predict_scales_a_reverse_speed_by_the_reverse_limit():
