@@ -27,7 +27,7 @@ from lrp_gym.localization.metrics import reliability
 
 WRONG_M = 0.3
 STUCK_FRAMES = 10
-#: Confidence bands of the reliability table: ``converged`` starts at 0.9.
+#: Confidence bands of the reliability table: ``settled`` starts at 0.9, ``converged`` at 0.99.
 BANDS = (0.0, 0.5, 0.8, 0.9, 0.95, 0.99, 1.0)
 
 

@@ -41,8 +41,9 @@ def stuck_episodes(episodes: Sequence[tuple[np.ndarray, np.ndarray]]) -> int:
     return sum(longest_wrong_stretch(e, c) >= STUCK_WRONG_FRAMES for e, c in episodes)
 
 
-#: Confidence bin edges of :func:`reliability`: finer near 1, where ``converged`` starts (0.9)
-#: and where a confidence's claim (1 - c: how often it may be wrong) is a few per cent.
+#: Confidence bin edges of :func:`reliability`: finer near 1, where ``settled`` (0.9) and
+#: ``converged`` (0.99) start and where a confidence's claim (1 - c: how often it may be
+#: wrong) is a few per cent.
 RELIABILITY_EDGES = (0.0, 0.2, 0.4, 0.6, 0.8, 0.9, 0.95, 0.99, 1.0)
 
 
