@@ -174,7 +174,7 @@ class LocalizationConfig(Strict):
     lost_restart_nats: PositiveFloat = 20.0
     lost_test_every: Annotated[int, Field(ge=1)] = Field(
         default=1,
-        description="while the estimate is converged, the lost test quiet, no recovery under "
+        description="while the estimate is settled, the lost test quiet, no recovery under "
         "way and the cloud's likelihood close to the last best grid cell, evaluate the lost "
         "test's map-wide grid (the largest per-frame cost) only every this many frames; "
         "1 (default): every frame; 4 keeps the trust rows but lets kidnaps go unnoticed "
@@ -186,7 +186,7 @@ class LocalizationConfig(Strict):
     max_random_fraction: Fraction = 0.25
     slip_adaptive: bool = Field(
         default=False,
-        description="inflate the motion noise while the converged estimate keeps moving away "
+        description="inflate the motion noise while the settled estimate keeps moving away "
         "from where the odometry alone would put it (wheel slip; lrp_gym.localization.slip)",
     )
     slip_max_inflation: Annotated[float, Field(ge=1.0, le=100.0)] = 4.0

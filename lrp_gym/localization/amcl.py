@@ -98,7 +98,7 @@ class Amcl:
         self.evidence = FrameEvidence(cfg.likelihood_exponent, cfg.likelihood_correlation_m)
         self._grid_loglik: np.ndarray | None = None
         self._grid_frame: Fingerprint | None = None  # the frame of the lost test's grid
-        self._converged = False
+        self._settled = False
         self._pending_global = False
         self.particles = np.zeros((0, 3))
         self.weights = np.zeros(0)
@@ -172,7 +172,7 @@ class Amcl:
         self.evidence.reset()
         if self.slip is not None:
             self.slip.reset()
-        self._grid_loglik, self._grid_frame, self._converged = None, None, False
+        self._grid_loglik, self._grid_frame, self._settled = None, None, False
         # A uniform prior is drawn from the first frame's likelihood (sensor-based start).
         self._pending_global = bool(
             self.global_proposal and self.cfg.init == "uniform" and pose is None
@@ -218,7 +218,7 @@ class Amcl:
         self.weights = w / total
         ess = effective_sample_size(self.weights)
         estimate = self._estimate(ess)
-        self._converged = estimate.settled
+        self._settled = estimate.settled
         if self.slip is not None:
             self.slip.update(odometry, estimate.pose, estimate.settled)
         n = len(self.weights)
@@ -250,7 +250,7 @@ class Amcl:
         if self.global_proposal and not self._pending_global:
             # lost_test_every > 1: the test (and its grid) may skip quiet frames
             marginal = self._cloud_marginal(fingerprint, w, returns)
-            quiet = self._converged and self.p_random == 0.0
+            quiet = self._settled and self.p_random == 0.0
             if self.lost.due(quiet, marginal, fingerprint.count):
                 grid = self._grid_loglik = self.grid.log_likelihood(self.lost_model, fingerprint)
                 best = float(np.max(grid))
