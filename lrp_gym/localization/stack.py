@@ -81,8 +81,8 @@ class LocalizationStack:
     - the tracker's tracks (:class:`LrpTracker`) and the window test of its last frame;
     - the localiser's particles ``(P, 3)`` and weights ``(P,)`` (AMCL; a belief grid for the
       grid filter), its recovery averages and the predicted cloud of its last update;
-    - :attr:`converged` and :attr:`settled`, the previous frame's flags; ``settled``, with
-      ``tracks``, decides whether the cloud may rank the tracks or only veto them;
+    - :attr:`settled`, the previous frame's :attr:`PoseEstimate.settled`; with ``tracks`` it
+      decides whether the cloud may rank the tracks or only veto them;
     - :attr:`sensor`, the radar of this episode (the surveyed layout, or a moved one);
     - the reflector monitor's statistics, and which map (without suspects) the localiser uses.
 
@@ -122,7 +122,7 @@ class LocalizationStack:
         self.measurements = measurements
         self.map_aided = map_aided
         self.use_ego = use_ego
-        self.converged = self.settled = False  # the last frame's flags (PoseEstimate)
+        self.settled = False
         self.monitor = monitor
         self.clutter_map = clutter_map
         # The surveyed map's models by the suspects they drop (read-only, shared by spawns).
@@ -176,7 +176,7 @@ class LocalizationStack:
         new.tracker.reset()
         new.localizer = self.localizer.spawn()
         new.localizer.model = self._models[()]
-        new.converged = new.settled = False
+        new.settled = False
         if self.monitor is not None:
             new.monitor = replace(self.monitor)  # fresh statistics (see __post_init__)
         new.clutter_map = self.clutter_map and replace(self.clutter_map)  # no points yet
@@ -197,7 +197,7 @@ class LocalizationStack:
         self.tracker.reset()
         self.localizer.model = self._models[()]
         self.localizer.reset(rng, known_pose)
-        self.converged = self.settled = False
+        self.settled = False
         self.sensor = self.surveyed_sensor
         if self.monitor is not None:
             self.monitor.reset()
@@ -286,7 +286,7 @@ class LocalizationStack:
         else:
             detections = frame
             fingerprint, estimate = self._track_and_localize(frame, ego, rng)
-        self.converged, self.settled = bool(estimate.converged), bool(estimate.settled)
+        self.settled = bool(estimate.settled)
         suspects = () if detections is None else self._check_reflectors(estimate, ego, detections)
         t1 = time.perf_counter()
         lut_estimate, pose_estimate = self._with_lut(fingerprint, estimate)
