@@ -104,6 +104,13 @@ class LocalizationConfig(Strict):
         "ghosts than ghost_probability (omnidirectional reflectors), else the set ones; "
         "0: always as set",
     )
+    ghost_weights: Literal["surveyed", "uniform"] = Field(
+        default="surveyed",
+        description="where the return-mix survey applies (return_mix_survey_poses): share "
+        "ghost_probability among the predicted ghosts by how often the survey found each "
+        "(a few strong ghosts via one face near the radar, many weak ones never seen); "
+        "uniform: equally",
+    )
     global_proposal: bool = Field(
         default=True,
         description="draw the global start and recovery particles from a map-wide grid of the "

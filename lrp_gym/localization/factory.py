@@ -6,8 +6,9 @@ import json
 
 from lrp_gym.config import LocalizationConfig, ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
+from lrp_gym.localization.ghosts import GhostModel
 from lrp_gym.localization.grid import GridFilter
-from lrp_gym.localization.return_mix import return_mix
+from lrp_gym.localization.return_mix import ReturnMix, return_mix
 from lrp_gym.localization.visibility import RadarLink, ReflectorVisibility
 from lrp_gym.radar.delivery_rate import lrp_detection_rate
 from lrp_gym.radar.sensor import RadarSensor
@@ -37,9 +38,16 @@ def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
     """The link budget of ``sensor`` for the localiser of scenario ``cfg``; surveyed
     (:meth:`RadarLink.surveyed`) when ``localization.detection_survey_poses`` asks for it and
     the world needs a visibility model (the survey calibrates its per-reflector
-    probabilities; a world whose reflectors are detected everywhere has none)."""
+    probabilities; a world whose reflectors are detected everywhere has none); with the
+    ghosts weighted by the return-mix survey where :func:`measured_mixture` uses it and
+    ``localization.ghost_weights`` is ``surveyed``."""
     link = RadarLink.from_sensor(sensor)
     loc = cfg.localization
+    mix = _ghost_survey(cfg)
+    if mix is not None and loc.ghost_weights == "surveyed":
+        world = sensor.world
+        reflector = GhostModel(world.room, world.layout, world.mount_height_m).row_reflector
+        link = link.with_ghost_weights(mix.ghost_row_weights(), reflector)
     if loc.detection_survey_poses == 0 or not loc.reflector_visibility:
         return link
     if not ReflectorVisibility.of(sensor.world, link).needed():
@@ -61,22 +69,31 @@ def measured_mixture(cfg: ScenarioConfig) -> LocalizationConfig:
     the measured one, 2 of 300 episodes under unmapped clutter stuck on a wrong pose (0 with
     the set one; perhaps chance, see docs/trust.md), and the set one is the validated one."""
     loc = cfg.localization
-    if loc.return_mix_survey_poses == 0:
+    mix = _ghost_survey(cfg)
+    if mix is None:
         return loc
-    structure, ghost = _surveyed_probabilities(cfg)
-    if ghost <= loc.ghost_probability:
-        return loc
+    structure, ghost = mix.map_return_probabilities()
     return loc.model_copy(update={"structure_probability": structure, "ghost_probability": ghost})
 
 
-#: Surveyed (structure, ghost) probabilities per survey inputs: every env of a scenario (each
-#: test, each evaluation) would otherwise repeat the same seeded frames.
-_MIXTURES: dict[str, tuple[float, float]] = {}
+def _ghost_survey(cfg: ScenarioConfig) -> ReturnMix | None:
+    """``cfg``'s return-mix survey where it applies: ``localization.return_mix_survey_poses``
+    asks for it and it finds more ghosts than ``ghost_probability`` says; else None."""
+    loc = cfg.localization
+    if loc.return_mix_survey_poses == 0:
+        return None
+    mix = _survey(cfg)
+    return mix if mix.map_return_probabilities()[1] > loc.ghost_probability else None
 
 
-def _surveyed_probabilities(cfg: ScenarioConfig) -> tuple[float, float]:
-    """:meth:`ReturnMix.map_return_probabilities` of ``cfg``'s survey, computed once per
-    process for the parts of the scenario it reads."""
+#: Return-mix surveys per survey inputs: every env of a scenario (each test, each
+#: evaluation) would otherwise repeat the same seeded frames.
+_MIXTURES: dict[str, ReturnMix] = {}
+
+
+def _survey(cfg: ScenarioConfig) -> ReturnMix:
+    """:func:`return_mix` of ``cfg``, computed once per process for the parts of the scenario
+    it reads."""
     key = json.dumps(
         [
             cfg.room.model_dump(mode="json"),
@@ -89,6 +106,5 @@ def _surveyed_probabilities(cfg: ScenarioConfig) -> tuple[float, float]:
         sort_keys=True,
     )
     if key not in _MIXTURES:
-        mix = return_mix(cfg, cfg.localization.return_mix_survey_poses, seed=0)
-        _MIXTURES[key] = mix.map_return_probabilities()
+        _MIXTURES[key] = return_mix(cfg, cfg.localization.return_mix_survey_poses, seed=0)
     return _MIXTURES[key]

@@ -182,6 +182,16 @@ class GhostModel:
         """Rows of :meth:`ranges`."""
         return sum(len(pairs) * len(idx) for idx, pairs, _ in self._groups)
 
+    @property
+    def row_reflector(self) -> np.ndarray:
+        """Layout index (G,) of the reflector of each row of :meth:`ranges`."""
+        return self._rows[:, 2].copy()
+
+    @property
+    def row_bounces(self) -> np.ndarray:
+        """Face bounces (G,) of each row's round trip: 1 or 2."""
+        return _ORDER[self._rows[:, 0]] + _ORDER[self._rows[:, 1]]
+
     def ranges(
         self, xy: np.ndarray, velocity_xy: np.ndarray | None = None, dtype=np.float64
     ) -> tuple[np.ndarray, np.ndarray | None]:

@@ -124,7 +124,8 @@ class FingerprintModel:
         distance of its type matches costs ``1 - P_D`` (0 leaves this term out).
     ghost_probability : float
         Probability that a measured distance is a reflector seen via a wall or the ceiling
-        (:mod:`lrp_gym.localization.ghosts`); needs ``room``.
+        (:mod:`lrp_gym.localization.ghosts`); needs ``room``. ``ghost_weights`` (G,) share it
+        among the predicted ghosts (:class:`MapReturns`); None: equally.
     use_numba : bool
         Evaluate the map-return density with the numba kernel of
         :mod:`lrp_gym.localization._map_kernel` when numba is installed (else numpy).
@@ -150,6 +151,7 @@ class FingerprintModel:
         max_velocity_mps: float = 5.0,
         detection_probability: float = 0.0,
         ghost_probability: float = 0.0,
+        ghost_weights: np.ndarray | None = None,
         use_numba: bool = True,
         visibility: ReflectorVisibility | VisibilityMap | None = None,
     ) -> None:
@@ -164,8 +166,9 @@ class FingerprintModel:
         self.ghost_probability = float(ghost_probability) if room is not None else 0.0
         self.map_returns: MapReturns | None = None
         if room is not None and self.structure_probability + self.ghost_probability > 0.0:
+            probabilities = (self.structure_probability, self.ghost_probability)
             self.map_returns = MapReturns(
-                room, layout, mount_height_m, self.structure_probability, self.ghost_probability
+                room, layout, mount_height_m, *probabilities, ghost_weights
             )
         self.ghosts = None if self.map_returns is None else self.map_returns.ghosts
         self.type_names = layout.type_names
@@ -182,7 +185,8 @@ class FingerprintModel:
     ) -> FingerprintModel:
         """The localisers' model of ``world``: its layout, radar height and range, and room
         structure, with the measurement, clutter and structure settings of ``cfg``; with the
-        radar's ``link`` budget, each reflector's detection probability from its SNR."""
+        radar's ``link`` budget, each reflector's detection probability from its SNR (and
+        the ghosts' weights, when it carries surveyed ones)."""
         return cls(
             world.layout,
             world.mount_height_m,
@@ -196,6 +200,7 @@ class FingerprintModel:
             max_velocity_mps=world.fmcw.max_velocity_mps,
             detection_probability=cfg.detection_probability,
             ghost_probability=cfg.ghost_probability,
+            ghost_weights=None if link is None else link.ghost_weights,
             visibility=(
                 ReflectorVisibility.for_world(world, link) if cfg.reflector_visibility else None
             ),

@@ -38,6 +38,11 @@ class MapReturns:
     structure_probability, ghost_probability : float
         Probability that a measured distance is a structure return, or a reflector's ghost;
         their sum is at most 1. A zero leaves that kind of return out.
+    ghost_weights : ndarray (G,), optional
+        Relative weight of each predicted ghost (the rows of
+        :class:`~lrp_gym.localization.ghosts.GhostModel`), e.g. how often a survey found it
+        (:func:`~lrp_gym.localization.return_mix.return_mix`); scaled to sum to
+        ``ghost_probability``. None: all ghosts alike.
     """
 
     def __init__(
@@ -47,6 +52,7 @@ class MapReturns:
         mount_height_m: float,
         structure_probability: float,
         ghost_probability: float,
+        ghost_weights: np.ndarray | None = None,
     ) -> None:
         if structure_probability + ghost_probability > 1.0:
             raise ValueError(
@@ -65,7 +71,7 @@ class MapReturns:
             w = self.structure_probability / N_STRUCTURE_RETURNS
             parts.append(np.full(N_STRUCTURE_RETURNS, w))
         if self.ghosts is not None:
-            parts.append(np.full(self.ghosts.count, self.ghost_probability / self.ghosts.count))
+            parts.append(self.ghost_probability * _shares(ghost_weights, self.ghosts.count))
         #: Mixture weight (K,) of each row of :meth:`ranges`; None when there is none.
         self.weights: np.ndarray | None = np.concatenate(parts) if parts else None
         #: Structure rows in float32 by the compiled kernel when numba is installed (the
@@ -120,3 +126,16 @@ class MapReturns:
         lx, ly, lz = (float(s) for s in self.room.size_m)
         structure_rows_jit(xy, v, lx, ly, lz - h, out, rates)
         return out, (rates if velocity_xy is not None else None)
+
+
+def _shares(weights: np.ndarray | None, count: int) -> np.ndarray:
+    """``weights`` (``count``,) scaled to sum to 1; equal shares for None."""
+    if weights is None:
+        return np.full(count, 1.0 / count)
+    weights = np.asarray(weights, dtype=float)
+    if weights.shape != (count,) or np.any(weights < 0) or not weights.sum() > 0:
+        raise ValueError(
+            f"ghost_weights: {count} non-negative weights (one per ghost row) with a positive "
+            f"sum expected, got shape {weights.shape}"
+        )
+    return weights / weights.sum()

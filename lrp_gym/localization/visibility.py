@@ -82,6 +82,12 @@ class RadarLink:
         Per reflector, the factor a calibration survey found between how often the radar
         delivers it in view and what the likelihood's ``detection_probability`` assumes
         (:meth:`surveyed`); None: 1 for all.
+    ghost_weights : ndarray (G,) or None
+        Relative weight of each of the layout's predicted ghosts (the rows of
+        :class:`~lrp_gym.localization.ghosts.GhostModel`), from how often a survey found
+        each among the radar's returns (:meth:`with_ghost_weights`); None: all alike.
+    ghost_reflector : ndarray of int (G,) or None
+        The reflector of each weighted ghost (to reduce the layout with).
     """
 
     link_w_m2: float
@@ -91,6 +97,8 @@ class RadarLink:
     min_range_m: float
     pd_table: np.ndarray
     delivery: np.ndarray | None = None
+    ghost_weights: np.ndarray | None = None
+    ghost_reflector: np.ndarray | None = None
 
     @classmethod
     def from_sensor(cls, sensor: RadarSensor) -> RadarLink:
@@ -129,10 +137,24 @@ class RadarLink:
         target = np.clip(np.minimum(target, detection_probability), 0.05, None)
         return replace(self, delivery=target / detection_probability)
 
+    def with_ghost_weights(self, weights: np.ndarray, reflector: np.ndarray) -> RadarLink:
+        """This link with the ghost rows weighted by ``weights`` (G,), the rows of the
+        reflectors ``reflector`` (G,) (layout indices)."""
+        weights, reflector = np.asarray(weights, dtype=float), np.asarray(reflector)
+        if weights.shape != reflector.shape or np.any(weights < 0):
+            raise ValueError("ghost weights: one non-negative weight per ghost row expected")
+        return replace(self, ghost_weights=weights, ghost_reflector=reflector)
+
     def of_reflectors(self, keep: np.ndarray) -> RadarLink:
         """This link for the layout reduced to the reflectors ``keep`` (indices, layout
-        order): their survey's scaling kept, the others' dropped."""
-        return self if self.delivery is None else replace(self, delivery=self.delivery[keep])
+        order): their survey's scaling and their ghosts' weights kept, the others' dropped.
+        The kept ghost rows stay in order, which is the order of the reduced layout's rows."""
+        link = self if self.delivery is None else replace(self, delivery=self.delivery[keep])
+        if self.ghost_weights is None:
+            return link
+        rows = np.isin(self.ghost_reflector, keep)
+        new_index = np.searchsorted(np.asarray(keep), self.ghost_reflector[rows])
+        return replace(link, ghost_weights=self.ghost_weights[rows], ghost_reflector=new_index)
 
     def detection_probability(
         self, rcs_m2: np.ndarray, dist_m: np.ndarray, cos_zenith: np.ndarray

@@ -1,0 +1,152 @@
+"""Ghosts weighted by how often a survey finds them (return_mix's row counts, the radar link's
+ghost weights, MapReturns' mixture weights)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from lrp_gym.config import load_scenario
+from lrp_gym.localization.factory import measured_mixture, radar_link
+from lrp_gym.localization.ghosts import GhostModel
+from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.localization.map_returns import MapReturns
+from lrp_gym.localization.reflector_monitor import model_without
+from lrp_gym.localization.return_mix import ReturnMix, return_mix
+from lrp_gym.radar.delivery_rate import random_poses
+from lrp_gym.radar.sensor import RadarSensor
+from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.tracking.tracker import LrpTracker
+from lrp_gym.world.world import World
+
+POSES = 60
+
+
+def _spheres(**loc):
+    """The paper room with its four reflectors spheres (ghosts via every face), fast radar."""
+    return load_scenario("ipin2023").with_overrides(
+        {
+            "radar": {"fidelity": "detections"},
+            "reflectors": {"types": {"A": {"kind": "sphere", "diameter_m": 0.2}}},
+            "localization": {"return_mix_survey_poses": POSES, **loc},
+        }
+    )
+
+
+def _link(cfg):
+    world = World.from_config(cfg)
+    return world, radar_link(cfg, RadarSensor(world, cfg.radar))
+
+
+def test_the_survey_finds_each_ghost_where_the_model_predicts_it():
+    """Nearly every ghost return of the channel lies within a range bin of one of its
+    reflector's predicted ghosts (the two use the same image method)."""
+    cfg = _spheres()
+    mix = return_mix(cfg, POSES)
+    matched = sum(mix.ghost_row_counts)
+    assert matched >= 0.95 * mix.ghost * mix.n_returns
+    world = World.from_config(cfg)
+    assert len(mix.ghost_row_counts) == GhostModel(world.room, world.layout, 0.3).count
+
+
+def test_one_bounce_ghosts_are_found_more_often_than_two_bounce_ones():
+    """Each face bounce costs the wall's reflection loss: per row, ghosts via one face are
+    found several times as often as ghosts via two, and a few rows hold most returns."""
+    mix = return_mix(_spheres(), POSES)
+    counts = np.asarray(mix.ghost_row_counts, dtype=float)
+    bounces = np.asarray(mix.ghost_row_bounces)
+    assert set(bounces) == {1, 2}
+    assert counts[bounces == 1].mean() > 3.0 * counts[bounces == 2].mean()
+    top = np.sort(counts)[::-1]
+    assert top[: len(top) // 10].sum() > 0.5 * counts.sum()
+
+
+def test_row_weights_sum_to_one_and_keep_unseen_rows():
+    mix = ReturnMix(0.2, 0.5, 0.2, 0.1, 10, 5, (4, 0, 0, 1, 0, 0), (1, 1, 1, 2, 2, 2))
+    w = mix.ghost_row_weights()
+    assert w.sum() == pytest.approx(1.0)
+    # the class pseudo-counts: (4 + 1) / 3 per one-bounce row, (1 + 1) / 3 per two-bounce row
+    expected = np.array([4 + 5 / 3, 5 / 3, 5 / 3, 1 + 2 / 3, 2 / 3, 2 / 3])
+    np.testing.assert_allclose(w, expected / expected.sum())
+    assert np.all(w > 0)
+
+
+def test_map_returns_share_the_ghost_probability_by_the_weights():
+    cfg = _spheres()
+    world = World.from_config(cfg)
+    room, layout, h = world.room, world.layout, world.mount_height_m
+    uniform = MapReturns(room, layout, h, 0.3, 0.5)
+    n = uniform.ghosts.count
+    weights = np.arange(1.0, n + 1.0)
+    weighted = MapReturns(room, layout, h, 0.3, 0.5, weights)
+    assert weighted.weights.sum() == pytest.approx(0.8)
+    ghost_w = weighted.weights[-n:]
+    np.testing.assert_allclose(ghost_w, 0.5 * weights / weights.sum())
+    np.testing.assert_allclose(weighted.weights[:-n], uniform.weights[:-n])  # the structure
+    with pytest.raises(ValueError, match="ghost_weights"):
+        MapReturns(room, layout, h, 0.3, 0.5, weights[:-1])
+
+
+def test_the_link_carries_the_surveyed_weights_only_where_the_survey_applies():
+    _, link = _link(_spheres())
+    mix = return_mix(_spheres(), POSES)
+    np.testing.assert_allclose(link.ghost_weights, mix.ghost_row_weights())
+    _, off = _link(_spheres(ghost_weights="uniform"))
+    assert off.ghost_weights is None
+    # the paper room's trihedrals return fewer ghosts than the set share: no survey used
+    paper = load_scenario("ipin2023").with_overrides({"radar": {"fidelity": "detections"}})
+    assert _link(paper)[1].ghost_weights is None
+
+
+def test_a_reduced_layout_keeps_its_reflectors_ghost_weights_in_row_order():
+    """The reflector monitor's model without a reflector: its ghost rows are the full layout's
+    rows of the kept reflectors, in order, with their weights."""
+    cfg = _spheres()
+    world, link = _link(cfg)
+    loc = measured_mixture(cfg)
+    reduced = model_without(world, loc, (1,), link)
+    full = GhostModel(world.room, world.layout, world.mount_height_m)
+    kept = full.row_reflector != 1
+    xy = np.random.default_rng(0).uniform(0.5, 3.0, size=(20, 2))
+    full_m = full.ranges(xy)[0]
+    np.testing.assert_array_equal(reduced.map_returns.ghosts.ranges(xy)[0], full_m[kept])
+    w = link.ghost_weights[kept]
+    ghost_w = reduced.map_returns.weights[-int(kept.sum()) :]
+    np.testing.assert_allclose(ghost_w, loc.ghost_probability * w / w.sum())
+
+
+def test_surveyed_weights_explain_new_frames_better_than_equal_ones():
+    """Held out (other poses and noise than the survey's): the radar's frames are more likely
+    at the true pose with the surveyed weights, and the true pose stands further above the
+    best position more than 1 m away."""
+    cfg = _spheres()
+    world, link = _link(cfg)
+    loc = measured_mixture(cfg)
+    models = [
+        FingerprintModel.for_world(world, loc, link),
+        FingerprintModel.for_world(world, loc, replace(link, ghost_weights=None)),
+    ]
+    sensor = RadarSensor(world, cfg.radar)
+    classifier = LrpTracker.from_world(world, cfg.tracking).classifier
+    rng = np.random.default_rng(99)
+    poses, vels = random_poses(world, 40, rng, cfg.robot.radius_m, cfg.robot.max_speed_mps)
+    gx, gy = np.meshgrid(*(np.arange(0.2, s, 0.1) for s in world.room.size_m[:2]))
+    grid = np.c_[gx.ravel(), gy.ravel()]
+    gain, margins = [], []
+    for pose, vel in zip(poses, vels, strict=True):
+        det = sensor.detect(sensor.paths(pose, vel), rng)
+        cand = classifier.candidates(det)
+        fp = Fingerprint.from_distances(
+            world.layout.type_names, [det.range_m[cand[:, t]] for t in range(cand.shape[1])]
+        )
+        wrong = grid[np.hypot(*(grid - pose[:2]).T) > 1.0]
+        at_truth = [m.log_likelihood(pose[None, :2], fp)[0] for m in models]
+        best_wrong = [m.log_likelihood(wrong, fp).max() for m in models]
+        gain.append(at_truth[0] - at_truth[1])
+        margins.append(np.subtract(at_truth, best_wrong))
+    assert np.mean(gain) > 0.3
+    assert np.mean(np.array(gain) > 0) > 0.6
+    surveyed, uniform = np.mean(margins, axis=0)
+    assert surveyed > uniform
