@@ -192,6 +192,11 @@ class GhostModel:
         """Face bounces (G,) of each row's round trip: 1 or 2."""
         return _ORDER[self._rows[:, 0]] + _ORDER[self._rows[:, 1]]
 
+    @property
+    def row_bistatic(self) -> np.ndarray:
+        """Whether each row (G,) is a retro-directive reflector's direct-and-face pair."""
+        return self._rows[:, 3] == 1
+
     def ranges(
         self, xy: np.ndarray, velocity_xy: np.ndarray | None = None, dtype=np.float64
     ) -> tuple[np.ndarray, np.ndarray | None]:

@@ -55,6 +55,9 @@ class ReturnMix:
         :class:`~lrp_gym.localization.ghosts.GhostModel`.
     ghost_row_bounces : tuple of int (G,)
         Face bounces of each row (1 or 2; :attr:`GhostModel.row_bounces`).
+    ghost_row_classes : tuple of int (G,)
+        Rows alike but for geometry share a class: the same reflector type, bounces and
+        pair kind (same face both ways, direct one way, any pair of an omnidirectional type).
     """
 
     direct: float
@@ -65,20 +68,22 @@ class ReturnMix:
     n_poses: int
     ghost_row_counts: tuple[int, ...] = ()
     ghost_row_bounces: tuple[int, ...] = ()
+    ghost_row_classes: tuple[int, ...] = ()
 
     def ghost_row_weights(self) -> np.ndarray:
-        """Relative weight (G,) of each ghost row, summing to 1: its count plus a pseudo-count
-        shared by the rows of its bounce class (one return of the class, plus the class's
-        mean count per row), so that a row the survey never saw keeps about what its class
-        gets per row. Uniform when the layout has no ghost rows counted."""
+        """Relative weight (G,) of each ghost row, summing to 1: the posterior mean of the
+        row's rate of returns per survey, its count shrunk towards its class's mean ``m``
+        (a gamma prior of shape 1 and mean ``m``: ``(count + 1) / (1 + 1 / m)``, with ``m``
+        counting one return more than the class had, so that none is 0). A row never seen
+        in a class seen often is thus weighed as about one return, not as its class's mean."""
         counts = np.asarray(self.ghost_row_counts, dtype=float)
-        bounce = np.asarray(self.ghost_row_bounces, dtype=int)
-        prior = np.zeros_like(counts)
-        for bounces in np.unique(bounce):
-            rows = bounce == bounces
-            prior[rows] = (counts[rows].sum() + 1.0) / rows.sum()
-        w = counts + prior
-        return w / w.sum() if w.sum() > 0 else w
+        classes = np.asarray(self.ghost_row_classes, dtype=int)
+        weights = np.zeros_like(counts)
+        for c in np.unique(classes):
+            rows = classes == c
+            mean = (counts[rows].sum() + 1.0) / rows.sum()
+            weights[rows] = (counts[rows] + 1.0) / (1.0 + 1.0 / mean)
+        return weights / weights.sum() if weights.sum() > 0 else weights
 
     def map_return_probabilities(self, floor: float = 0.01) -> tuple[float, float]:
         """``(structure_probability, ghost_probability)`` of the likelihood: the shares of
@@ -136,7 +141,15 @@ def return_mix(cfg: ScenarioConfig, n_poses: int = 200, seed: int = 0) -> Return
         n_poses=int(n_poses),
         ghost_row_counts=tuple(int(c) for c in row_counts),
         ghost_row_bounces=tuple(int(b) for b in ghosts.row_bounces),
+        ghost_row_classes=tuple(int(c) for c in _row_classes(world, ghosts)),
     )
+
+
+def _row_classes(world: World, ghosts: GhostModel) -> np.ndarray:
+    """Class index (G,) of each ghost row: its reflector's type, bounces and pair kind."""
+    kind = np.c_[world.layout.type_index[ghosts.row_reflector], ghosts.row_bounces]
+    kind = np.c_[kind, ghosts.row_bistatic]
+    return np.unique(kind, axis=0, return_inverse=True)[1].reshape(-1)
 
 
 #: Slot of a path kind in :func:`return_mix`'s counts (others: 3).

@@ -63,14 +63,30 @@ def test_one_bounce_ghosts_are_found_more_often_than_two_bounce_ones():
     assert top[: len(top) // 10].sum() > 0.5 * counts.sum()
 
 
-def test_row_weights_sum_to_one_and_keep_unseen_rows():
-    mix = ReturnMix(0.2, 0.5, 0.2, 0.1, 10, 5, (4, 0, 0, 1, 0, 0), (1, 1, 1, 2, 2, 2))
+def test_row_weights_shrink_each_count_towards_its_class():
+    counts, classes = (4, 0, 0, 1, 0, 0), (0, 0, 0, 1, 1, 1)
+    mix = ReturnMix(0.2, 0.5, 0.2, 0.1, 10, 5, counts, (1, 1, 1, 2, 2, 2), classes)
     w = mix.ghost_row_weights()
     assert w.sum() == pytest.approx(1.0)
-    # the class pseudo-counts: (4 + 1) / 3 per one-bounce row, (1 + 1) / 3 per two-bounce row
-    expected = np.array([4 + 5 / 3, 5 / 3, 5 / 3, 1 + 2 / 3, 2 / 3, 2 / 3])
+    # class means (4 + 1) / 3 and (1 + 1) / 3; each row (count + 1) / (1 + 1 / mean)
+    expected = np.array([5 / 1.6, 1 / 1.6, 1 / 1.6, 2 / 2.5, 1 / 2.5, 1 / 2.5])
     np.testing.assert_allclose(w, expected / expected.sum())
     assert np.all(w > 0)
+
+
+def test_rows_of_one_class_are_alike_but_for_geometry():
+    """Classes: same reflector type, bounces and pair kind (the 2 + 2 layout's two trihedral
+    types: 2 types x (same face, direct and face) = 4 classes)."""
+    cfg = load_scenario("ipin2023-2types").with_overrides({"radar": {"fidelity": "detections"}})
+    mix = return_mix(cfg, 5)
+    world = World.from_config(cfg)
+    ghosts = GhostModel(world.room, world.layout, world.mount_height_m)
+    classes = np.asarray(mix.ghost_row_classes)
+    assert len(np.unique(classes)) == 4
+    for c in np.unique(classes):
+        rows = classes == c
+        assert len(np.unique(world.layout.type_index[ghosts.row_reflector[rows]])) == 1
+        assert len(np.unique(ghosts.row_bistatic[rows])) == 1
 
 
 def test_map_returns_share_the_ghost_probability_by_the_weights():
