@@ -71,7 +71,7 @@ class MapReturns:
             w = self.structure_probability / N_STRUCTURE_RETURNS
             parts.append(np.full(N_STRUCTURE_RETURNS, w))
         if self.ghosts is not None:
-            parts.append(self.ghost_probability * _shares(ghost_weights, self.ghosts.count))
+            parts.append(_shares(self.ghost_probability, ghost_weights, self.ghosts.count))
         #: Mixture weight (K,) of each row of :meth:`ranges`; None when there is none.
         self.weights: np.ndarray | None = np.concatenate(parts) if parts else None
         #: Structure rows in float32 by the compiled kernel when numba is installed (the
@@ -128,14 +128,14 @@ class MapReturns:
         return out, (rates if velocity_xy is not None else None)
 
 
-def _shares(weights: np.ndarray | None, count: int) -> np.ndarray:
-    """``weights`` (``count``,) scaled to sum to 1; equal shares for None."""
+def _shares(total: float, weights: np.ndarray | None, count: int) -> np.ndarray:
+    """``total`` shared among ``count`` rows in proportion to ``weights``; equally for None."""
     if weights is None:
-        return np.full(count, 1.0 / count)
+        return np.full(count, total / count)
     weights = np.asarray(weights, dtype=float)
     if weights.shape != (count,) or np.any(weights < 0) or not weights.sum() > 0:
         raise ValueError(
             f"ghost_weights: {count} non-negative weights (one per ghost row) with a positive "
             f"sum expected, got shape {weights.shape}"
         )
-    return weights / weights.sum()
+    return total * weights / weights.sum()
