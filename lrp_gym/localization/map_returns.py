@@ -138,4 +138,4 @@ def _shares(total: float, weights: np.ndarray | None, count: int) -> np.ndarray:
             f"ghost_weights: {count} non-negative weights (one per ghost row) with a positive "
             f"sum expected, got shape {weights.shape}"
         )
-    return total * weights / weights.sum()
+    return total * (weights / weights.sum())  # the order the figures were measured with
