@@ -3,22 +3,17 @@ ghost weights, MapReturns' mixture weights)."""
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 
 from lrp_gym.config import load_scenario
+from lrp_gym.experiments.ghost_evidence import held_out_evidence
 from lrp_gym.localization.factory import measured_mixture, radar_link
 from lrp_gym.localization.ghosts import GhostModel
-from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.map_returns import MapReturns
 from lrp_gym.localization.reflector_monitor import model_without
 from lrp_gym.localization.return_mix import ReturnMix, return_mix
-from lrp_gym.radar.delivery_rate import random_poses
 from lrp_gym.radar.sensor import RadarSensor
-from lrp_gym.tracking.fingerprint import Fingerprint
-from lrp_gym.tracking.tracker import LrpTracker
 from lrp_gym.world.world import World
 
 POSES = 60
@@ -137,32 +132,10 @@ def test_surveyed_weights_explain_new_frames_better_than_equal_ones():
     """Held out (other poses and noise than the survey's): the radar's frames are more likely
     at the true pose with the surveyed weights, and the true pose stands further above the
     best position more than 1 m away."""
-    cfg = _spheres()
-    world, link = _link(cfg)
-    loc = measured_mixture(cfg)
-    models = [
-        FingerprintModel.for_world(world, loc, link),
-        FingerprintModel.for_world(world, loc, replace(link, ghost_weights=None)),
-    ]
-    sensor = RadarSensor(world, cfg.radar)
-    classifier = LrpTracker.from_world(world, cfg.tracking).classifier
-    rng = np.random.default_rng(99)
-    poses, vels = random_poses(world, 40, rng, cfg.robot.radius_m, cfg.robot.max_speed_mps)
-    gx, gy = np.meshgrid(*(np.arange(0.2, s, 0.1) for s in world.room.size_m[:2]))
-    grid = np.c_[gx.ravel(), gy.ravel()]
-    gain, margins = [], []
-    for pose, vel in zip(poses, vels, strict=True):
-        det = sensor.detect(sensor.paths(pose, vel), rng)
-        cand = classifier.candidates(det)
-        fp = Fingerprint.from_distances(
-            world.layout.type_names, [det.range_m[cand[:, t]] for t in range(cand.shape[1])]
-        )
-        wrong = grid[np.hypot(*(grid - pose[:2]).T) > 1.0]
-        at_truth = [m.log_likelihood(pose[None, :2], fp)[0] for m in models]
-        best_wrong = [m.log_likelihood(wrong, fp).max() for m in models]
-        gain.append(at_truth[0] - at_truth[1])
-        margins.append(np.subtract(at_truth, best_wrong))
-    assert np.mean(gain) > 0.3
-    assert np.mean(np.array(gain) > 0) > 0.6
-    surveyed, uniform = np.mean(margins, axis=0)
-    assert surveyed > uniform
+    evidence = held_out_evidence(_spheres(), frames=40)
+    assert np.mean(evidence.gain_nats) > 0.3
+    assert np.mean(evidence.gain_nats > 0) > 0.6
+    surveyed, equal = evidence.margin_nats.mean(axis=0)
+    assert surveyed > equal
+    with pytest.raises(ValueError, match="ghost_weights"):
+        held_out_evidence(_spheres(ghost_weights="uniform"), frames=1)

@@ -1,0 +1,76 @@
+"""Do the surveyed ghost weights explain new radar frames better than equal ones?
+
+Held out from the return-mix survey (other poses, other noise), each frame's RCS-window
+distances are weighed by the localisers' likelihood twice: with the radar link's surveyed
+ghost weights and with equal ones. A better model of the ghosts makes the frames more likely at
+the true position and sets the true position further above wrong ones (docs/trust.md,
+session 27).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from lrp_gym.config import ScenarioConfig
+from lrp_gym.localization.factory import measured_mixture, radar_link
+from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.radar.delivery_rate import random_poses
+from lrp_gym.radar.sensor import RadarSensor
+from lrp_gym.tracking.fingerprint import Fingerprint
+from lrp_gym.tracking.tracker import LrpTracker
+from lrp_gym.world.world import World
+
+#: Positions at least this far from the truth count as wrong (m).
+WRONG_M = 1.0
+#: Spacing of the floor grid searched for the best wrong position (m).
+GRID_M = 0.1
+
+
+@dataclass(frozen=True)
+class GhostEvidence:
+    """Per held-out frame (F,).
+
+    Attributes
+    ----------
+    gain_nats : ndarray (F,)
+        Log-likelihood at the true position, surveyed weights minus equal ones.
+    margin_nats : ndarray (F, 2)
+        The true position's log-likelihood minus the best wrong position's, with the
+        surveyed weights (column 0) and with equal ones (column 1).
+    """
+
+    gain_nats: np.ndarray
+    margin_nats: np.ndarray
+
+
+def held_out_evidence(cfg: ScenarioConfig, frames: int = 40, seed: int = 99) -> GhostEvidence:
+    """:class:`GhostEvidence` of scenario ``cfg`` over ``frames`` radar frames at random free
+    poses (``seed``: the poses and the noise; the survey's is 0). ``cfg`` needs surveyed
+    weights (a radar link with ``ghost_weights``)."""
+    world = World.from_config(cfg)
+    sensor = RadarSensor(world, cfg.radar)
+    link = radar_link(cfg, sensor)
+    if link.ghost_weights is None:
+        raise ValueError(f"{cfg.name}: no surveyed ghost weights (localization.ghost_weights)")
+    loc = measured_mixture(cfg)
+    equal = replace(link, ghost_weights=None)
+    models = [FingerprintModel.for_world(world, loc, lk) for lk in (link, equal)]
+    classifier = LrpTracker.from_world(world, cfg.tracking).classifier
+    rng = np.random.default_rng(seed)
+    poses, vels = random_poses(world, frames, rng, cfg.robot.radius_m, cfg.robot.max_speed_mps)
+    gx, gy = np.meshgrid(*(np.arange(2 * GRID_M, s, GRID_M) for s in world.room.size_m[:2]))
+    grid = np.c_[gx.ravel(), gy.ravel()]
+    gain, margins = [], []
+    for pose, vel in zip(poses, vels, strict=True):
+        det = sensor.detect(sensor.paths(pose, vel), rng)
+        cand = classifier.candidates(det)
+        per_type = [det.range_m[cand[:, t]] for t in range(cand.shape[1])]
+        fp = Fingerprint.from_distances(world.layout.type_names, per_type)
+        wrong = grid[np.hypot(*(grid - pose[:2]).T) > WRONG_M]
+        truth = [m.log_likelihood(pose[None, :2], fp)[0] for m in models]
+        best = [m.log_likelihood(wrong, fp).max() for m in models]
+        gain.append(truth[0] - truth[1])
+        margins.append(np.subtract(truth, best))
+    return GhostEvidence(np.array(gain), np.array(margins))
