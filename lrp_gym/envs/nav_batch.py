@@ -94,6 +94,10 @@ class NavBatch:
         self.stacks = [first] + [first.spawn() for _ in range(n - 1)]
         # None when no perturbation is on: the hot path then pays one `is None` test per hook.
         self.perturbations = [self._perturbation_set() for _ in range(n)]
+        # Each robot's perturbations draw from a child of its generator, spawned at reset:
+        # the same seed gives the same scatterers, kidnaps and drops whatever the localiser
+        # draws (two localiser settings compared on one seed see the same perturbations).
+        self.perturbation_rngs: list[np.random.Generator | None] = [None] * n
         self.obs_type: ObservationType = make_observation(
             cfg.env.observation, self.world.room.size_m
         )
@@ -137,8 +141,10 @@ class NavBatch:
         self.s_true_m[i] = path.project(self.pose[i, :2], 0.0, first_m)
         pert = self.perturbations[i]
         if pert is not None:
+            # spawn() leaves rng's own stream where it is: unperturbed episodes unchanged
+            self.perturbation_rngs[i] = rng.spawn(1)[0]
             # The radar may see another layout than the surveyed one the localiser uses.
-            stack.set_radar_layout(pert.reset(self.frame_context(i), rng))
+            stack.set_radar_layout(pert.reset(self.frame_context(i), self.perturbation_rngs[i]))
         self._sense(i, np.zeros(3), np.zeros(2), rng)
         self.s_est_m[i] = path.project(self.estimate(i).pose[:2], 0.0, first_m)
 
@@ -158,7 +164,7 @@ class NavBatch:
             odo = noisy_odometry(self.world.odometry_noise, prev[k], self.pose[i], rng)
             pert = self.perturbations[i]
             if pert is not None:
-                odo, moved = pert.move(self.frame_context(i), odo, rng)
+                odo, moved = pert.move(self.frame_context(i), odo, self.perturbation_rngs[i])
                 if moved is not None:
                     self.pose[i] = moved
             driven_m[k] = abs(float(odo[1]))
@@ -255,10 +261,10 @@ class NavBatch:
         pert = self.perturbations[i]
         hooks: dict[str, Any] = {}
         if pert is not None:
-            ctx = self.frame_context(i)
-            hidden, extra = pert.radar_inputs(ctx, rng)
+            ctx, prng = self.frame_context(i), self.perturbation_rngs[i]
+            hidden, extra = pert.radar_inputs(ctx, prng)
             hooks = {"hidden": hidden, "extra_scatterers": extra}
-            hooks["filter_detections"] = lambda det: pert.filter_detections(ctx, det, rng)
+            hooks["filter_detections"] = lambda det: pert.filter_detections(ctx, det, prng)
         frame = self.stacks[i].step(self.pose[i].copy(), velocity_xy, odometry, rng, **hooks)
         self.frames[i] = frame
         self.estimates[i] = frame.estimate

@@ -1,8 +1,9 @@
 """The perturbation interface: one small class per perturbation, hooks the env calls.
 
 A perturbation sees one :class:`FrameContext` per hook call and draws all its randomness from
-the generator it is given (the env's ``np_random``), so episodes stay reproducible from the
-env seed. Every hook has a no-op default; a class overrides only those it needs.
+the generator it is given (a child of the robot's ``np_random``, spawned at each reset), so
+episodes stay reproducible from the env seed and the same seed perturbs the same way whatever
+the localiser draws. Every hook has a no-op default; a class overrides only those it needs.
 
 Hook order in one env frame (see :class:`~lrp_gym.perturbations.composite.PerturbationSet`):
 

@@ -257,3 +257,38 @@ def test_no_perturbation_means_no_hook():
     env = gym.make("LRPRadarNavFast-v0")
     assert env.unwrapped.perturbations is None
     env.close()
+
+
+def test_the_same_seed_perturbs_the_same_way_whatever_the_localiser_draws():
+    """Two localiser settings that draw different numbers of values (10 000 or 500 initial
+    particles) on one seed: the same clutter scatterers, the same kidnap frame and put-down
+    (the true poses under the same actions), because the perturbations draw from their own
+    child of the robot's generator."""
+    import gymnasium as gym
+
+    runs = []
+    for particles in (10_000, 500):
+        over = {
+            "radar": {"fidelity": "detections"},
+            "perturbations": {
+                "clutter": {"severity": 0.5},
+                "kidnapping": {"severity": 1.0, "frames": [3, 3]},
+            },
+            "localization": {"initial_particles": particles},
+        }
+        env = gym.make("LRPRadarNavFast-v0", overrides=over)
+        env.reset(seed=11)
+        pert = env.unwrapped.core.perturbations[0]
+        scatterers = pert["clutter"].positions_m.copy()
+        poses = []
+        for _ in range(6):
+            *_, info = env.step(np.array([0.0, 0.5]))  # turn on the spot: never collides
+            poses.append(info["true_pose"])
+        runs.append((scatterers, np.array(poses), pert["kidnapping"].kidnap_frame))
+        env.close()
+    (s1, p1, k1), (s2, p2, k2) = runs
+    assert len(s1) > 0
+    np.testing.assert_array_equal(s1, s2)
+    assert k1 == k2 == 3
+    assert np.linalg.norm(p1[2, :2] - p1[1, :2]) > 2.0  # the put-down happened
+    np.testing.assert_array_equal(p1, p2)
