@@ -106,10 +106,9 @@ class LocalizationConfig(Strict):
     )
     ghost_weights: Literal["surveyed", "uniform"] = Field(
         default="surveyed",
-        description="where the return-mix survey applies (return_mix_survey_poses): share "
+        description="with a return-mix survey (return_mix_survey_poses > 0): share "
         "ghost_probability among the predicted ghosts by how often the survey found each "
-        "(a few strong ghosts via one face near the radar, many weak ones never seen); "
-        "uniform: equally",
+        "(a few strong ghosts, many weak ones never seen); uniform: equally",
     )
     global_proposal: bool = Field(
         default=True,

@@ -39,11 +39,12 @@ def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
     (:meth:`RadarLink.surveyed`) when ``localization.detection_survey_poses`` asks for it and
     the world needs a visibility model (the survey calibrates its per-reflector
     probabilities; a world whose reflectors are detected everywhere has none); with the
-    ghosts weighted by the return-mix survey where :func:`measured_mixture` uses it and
-    ``localization.ghost_weights`` is ``surveyed``."""
+    ghosts weighted by the return-mix survey when ``localization.return_mix_survey_poses``
+    asks for one and ``localization.ghost_weights`` is ``surveyed`` (in every room: unlike
+    the mixture's shares, the weights only say which ghosts the radar returns)."""
     link = RadarLink.from_sensor(sensor)
     loc = cfg.localization
-    mix = _ghost_survey(cfg)
+    mix = _survey(cfg) if loc.return_mix_survey_poses > 0 else None
     if mix is not None and loc.ghost_weights == "surveyed":
         world = sensor.world
         reflector = GhostModel(world.room, world.layout, world.mount_height_m).row_reflector

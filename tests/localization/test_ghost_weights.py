@@ -100,15 +100,21 @@ def test_map_returns_share_the_ghost_probability_by_the_weights():
         MapReturns(room, layout, h, 0.3, 0.5, weights[:-1])
 
 
-def test_the_link_carries_the_surveyed_weights_only_where_the_survey_applies():
+def test_the_link_carries_the_surveyed_weights_when_asked():
     _, link = _link(_spheres())
     mix = return_mix(_spheres(), POSES)
     np.testing.assert_allclose(link.ghost_weights, mix.ghost_row_weights())
     _, off = _link(_spheres(ghost_weights="uniform"))
     assert off.ghost_weights is None
-    # the paper room's trihedrals return fewer ghosts than the set share: no survey used
-    paper = load_scenario("ipin2023").with_overrides({"radar": {"fidelity": "detections"}})
-    assert _link(paper)[1].ghost_weights is None
+    assert _link(_spheres(return_mix_survey_poses=0))[1].ghost_weights is None
+    # the paper room's trihedrals return fewer ghosts than the set share: its mixture stays
+    # as set, but its ghosts are weighted too
+    paper = load_scenario("ipin2023").with_overrides(
+        {"radar": {"fidelity": "detections"}, "localization": {"return_mix_survey_poses": POSES}}
+    )
+    world, paper_link = _link(paper)
+    assert measured_mixture(paper) is paper.localization
+    assert len(paper_link.ghost_weights) == GhostModel(world.room, world.layout, 0.3).count
 
 
 def test_a_reduced_layout_keeps_its_reflectors_ghost_weights_in_row_order():
