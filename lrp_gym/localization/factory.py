@@ -6,7 +6,6 @@ import json
 
 from lrp_gym.config import LocalizationConfig, ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
-from lrp_gym.localization.ghosts import GhostModel
 from lrp_gym.localization.grid import GridFilter
 from lrp_gym.localization.return_mix import ReturnMix, return_mix
 from lrp_gym.localization.visibility import RadarLink, ReflectorVisibility
@@ -46,9 +45,7 @@ def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
     loc = cfg.localization
     mix = _survey(cfg) if loc.return_mix_survey_poses > 0 else None
     if mix is not None and loc.ghost_weights == "surveyed":
-        world = sensor.world
-        reflector = GhostModel(world.room, world.layout, world.mount_height_m).row_reflector
-        link = link.with_ghost_weights(mix.ghost_row_weights(), reflector)
+        link = link.with_ghost_weights(mix.ghost_row_weights(), mix.ghost_row_reflector)
     if loc.detection_survey_poses == 0 or not loc.reflector_visibility:
         return link
     if not ReflectorVisibility.of(sensor.world, link).needed():

@@ -58,6 +58,8 @@ class ReturnMix:
     ghost_row_classes : tuple of int (G,)
         Rows alike but for geometry share a class: the same reflector type, bounces and
         pair kind (same face both ways, direct one way, any pair of an omnidirectional type).
+    ghost_row_reflector : tuple of int (G,)
+        Layout index of each row's reflector (:attr:`GhostModel.row_reflector`).
     """
 
     direct: float
@@ -69,6 +71,7 @@ class ReturnMix:
     ghost_row_counts: tuple[int, ...] = ()
     ghost_row_bounces: tuple[int, ...] = ()
     ghost_row_classes: tuple[int, ...] = ()
+    ghost_row_reflector: tuple[int, ...] = ()
 
     def ghost_row_weights(self) -> np.ndarray:
         """Relative weight (G,) of each ghost row, summing to 1: the posterior mean of the
@@ -141,6 +144,7 @@ def return_mix(cfg: ScenarioConfig, n_poses: int = 200, seed: int = 0) -> Return
         n_poses=int(n_poses),
         ghost_row_counts=tuple(int(c) for c in row_counts),
         ghost_row_bounces=tuple(int(b) for b in ghosts.row_bounces),
+        ghost_row_reflector=tuple(int(m) for m in ghosts.row_reflector),
         ghost_row_classes=tuple(int(c) for c in _row_classes(world, ghosts)),
     )
 
