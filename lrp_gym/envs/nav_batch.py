@@ -94,9 +94,10 @@ class NavBatch:
         self.stacks = [first] + [first.spawn() for _ in range(n - 1)]
         # None when no perturbation is on: the hot path then pays one `is None` test per hook.
         self.perturbations = [self._perturbation_set() for _ in range(n)]
-        # Each robot's perturbations draw from a child of its generator, spawned at reset:
-        # the same seed gives the same scatterers, kidnaps and drops whatever the localiser
-        # draws (two localiser settings compared on one seed see the same perturbations).
+        # Sensing (radar, odometry noise) and perturbations draw from two children of the
+        # robot's generator, spawned at reset: one seed gives the same frames and kidnaps
+        # whatever the localiser draws, until two settings' paths part (paired comparisons).
+        self.sensing_rngs: list[np.random.Generator | None] = [None] * n
         self.perturbation_rngs: list[np.random.Generator | None] = [None] * n
         self.obs_type: ObservationType = make_observation(
             cfg.env.observation, self.world.room.size_m
@@ -132,6 +133,7 @@ class NavBatch:
         known = self.pose[i].copy() if self.cfg.localization.init == "gaussian" else None
         stack = self.stacks[i]
         stack.reset(rng, known)
+        self.sensing_rngs[i], self.perturbation_rngs[i] = rng.spawn(2)
         # The robot starts at the path's start: the first projections search only its first
         # metres. A global projection put a spread-out first estimate (uniform init) far along
         # the path, the observation's waypoints then pointed near the goal and the robot cut
@@ -141,8 +143,6 @@ class NavBatch:
         self.s_true_m[i] = path.project(self.pose[i, :2], 0.0, first_m)
         pert = self.perturbations[i]
         if pert is not None:
-            # spawn() leaves rng's own stream where it is: unperturbed episodes unchanged
-            self.perturbation_rngs[i] = rng.spawn(1)[0]
             # The radar may see another layout than the surveyed one the localiser uses.
             stack.set_radar_layout(pert.reset(self.frame_context(i), self.perturbation_rngs[i]))
         self._sense(i, np.zeros(3), np.zeros(2), rng)
@@ -160,15 +160,16 @@ class NavBatch:
         self.steps[robots] += 1
         driven_m = np.zeros(len(robots))
         for k, i in enumerate(robots):
-            rng = rngs[i]
-            odo = noisy_odometry(self.world.odometry_noise, prev[k], self.pose[i], rng)
+            odo = noisy_odometry(
+                self.world.odometry_noise, prev[k], self.pose[i], self.sensing_rngs[i]
+            )
             pert = self.perturbations[i]
             if pert is not None:
                 odo, moved = pert.move(self.frame_context(i), odo, self.perturbation_rngs[i])
                 if moved is not None:
                     self.pose[i] = moved
             driven_m[k] = abs(float(odo[1]))
-            self._sense(i, odo, velocity_xy[k], rng)
+            self._sense(i, odo, velocity_xy[k], rngs[i])
         self.last_action[robots] = actions
         progress_m = np.array([self._update_progress(i, d) for i, d in zip(robots, driven_m)])
         reached = np.array([self._goal_reached(i) for i in robots], dtype=bool)
@@ -257,7 +258,8 @@ class NavBatch:
     def _sense(
         self, i: int, odometry: np.ndarray, velocity_xy: np.ndarray, rng: np.random.Generator
     ) -> None:
-        """One frame of robot ``i``'s stack at its true pose, with the perturbations' hooks."""
+        """One frame of robot ``i``'s stack at its true pose, with the perturbations' hooks
+        (``rng``: the localiser's draws)."""
         pert = self.perturbations[i]
         hooks: dict[str, Any] = {}
         if pert is not None:
@@ -265,7 +267,14 @@ class NavBatch:
             hidden, extra = pert.radar_inputs(ctx, prng)
             hooks = {"hidden": hidden, "extra_scatterers": extra}
             hooks["filter_detections"] = lambda det: pert.filter_detections(ctx, det, prng)
-        frame = self.stacks[i].step(self.pose[i].copy(), velocity_xy, odometry, rng, **hooks)
+        frame = self.stacks[i].step(
+            self.pose[i].copy(),
+            velocity_xy,
+            odometry,
+            rng,
+            sensing_rng=self.sensing_rngs[i],
+            **hooks,
+        )
         self.frames[i] = frame
         self.estimates[i] = frame.estimate
 

@@ -224,6 +224,7 @@ class LocalizationStack:
         odometry: np.ndarray,
         rng: np.random.Generator,
         *,
+        sensing_rng: np.random.Generator | None = None,
         hidden: np.ndarray | None = None,
         extra_scatterers: tuple[np.ndarray, np.ndarray] | None = None,
         filter_detections: DetectionFilter | None = None,
@@ -239,17 +240,16 @@ class LocalizationStack:
         odometry : ndarray (3,)
             The reported odometry ``(rot1, trans, rot2)`` since the previous frame (zeros in
             the first), e.g. from :func:`~lrp_gym.world.robot.noisy_odometry`.
-        rng : numpy.random.Generator
-            Radar noise and the localiser's draws, in that order; the tracker draws none.
+        rng, sensing_rng : numpy.random.Generator
+            The localiser's draws; the radar noise (default: ``rng``). The tracker draws none.
         hidden, extra_scatterers
-            Passed to :meth:`RadarSensor.measure` (reflectors hidden this frame, extra point
-            scatterers), e.g. from a perturbation.
+            Passed to :meth:`RadarSensor.measure` (hidden reflectors, extra scatterers).
         filter_detections : callable, optional
-            Applied to the radar's detections before the tracker sees them (dropped or added
-            detections); it may draw from ``rng``.
+            Applied to the detections before the tracker sees them (drops or additions).
         """
         t0 = time.perf_counter()
-        detections = self.measure(true_pose, velocity_xy, rng, hidden, extra_scatterers)
+        radar_rng = rng if sensing_rng is None else sensing_rng
+        detections = self.measure(true_pose, velocity_xy, radar_rng, hidden, extra_scatterers)
         if filter_detections is not None:
             detections = filter_detections(detections)
         radar_s = time.perf_counter() - t0

@@ -98,7 +98,9 @@ def test_tracker_is_identified_by_this_frames_posterior(paper_cfg, paper_world):
 
 
 def test_env_rollout_is_the_stack_with_odometry_drawn_before_the_radar():
-    """The env is reset, odometry noise, then one stack step per frame, all from its seed."""
+    """The env is reset, odometry noise, then one stack step per frame, all from its seed:
+    the localiser from the seed's generator, the sensing from the first of two children
+    spawned after the reset (the second is the perturbations')."""
     env = LRPRadarNavEnv(radar_fidelity="detections", task_mode="path")
     seed, speed_frac = 11, 0.5
     env.reset(seed=seed)
@@ -111,13 +113,14 @@ def test_env_rollout_is_the_stack_with_odometry_drawn_before_the_radar():
     stack = LocalizationStack.from_config(world, env.cfg)
     rng = np.random.default_rng(seed)  # what gymnasium seeds np_random with
     stack.reset(rng, None)
+    sensing, _ = rng.spawn(2)
     speed = speed_frac * world.robot.max_speed_mps
     prev = None
     for info in infos:
         pose = info["true_pose"]
         vel = np.zeros(2) if prev is None else speed * np.array([np.cos(pose[2]), np.sin(pose[2])])
-        odo = noisy_odometry(world.odometry_noise, prev, pose, rng)
-        res = stack.step(pose, vel, odo, rng)
+        odo = noisy_odometry(world.odometry_noise, prev, pose, sensing)
+        res = stack.step(pose, vel, odo, rng, sensing_rng=sensing)
         np.testing.assert_array_equal(res.estimate.pose, info["est_pose"])
         assert len(res.detections) == info["n_detections"]
         prev = pose

@@ -259,11 +259,12 @@ def test_no_perturbation_means_no_hook():
     env.close()
 
 
-def test_the_same_seed_perturbs_the_same_way_whatever_the_localiser_draws():
+def test_the_same_seed_perturbs_and_senses_the_same_way_whatever_the_localiser_draws():
     """Two localiser settings that draw different numbers of values (10 000 or 500 initial
     particles) on one seed: the same clutter scatterers, the same kidnap frame and put-down
-    (the true poses under the same actions), because the perturbations draw from their own
-    child of the robot's generator."""
+    (the true poses under the same actions) and the same radar detections and odometry in
+    every frame, because the perturbations and the sensing draw from their own children of
+    the robot's generator."""
     import gymnasium as gym
 
     runs = []
@@ -280,15 +281,28 @@ def test_the_same_seed_perturbs_the_same_way_whatever_the_localiser_draws():
         env.reset(seed=11)
         pert = env.unwrapped.core.perturbations[0]
         scatterers = pert["clutter"].positions_m.copy()
-        poses = []
+        core = env.unwrapped.core
+        poses, ranges, odometry = [], [core.frames[0].detections.range_m], []
+        stack_step = core.stacks[0].step
+
+        def spy(pose, velocity_xy, odo, *args, seen=odometry, step=stack_step, **kwargs):
+            seen.append(np.array(odo))  # the noisy odometry the stack is given
+            return step(pose, velocity_xy, odo, *args, **kwargs)
+
+        core.stacks[0].step = spy
         for _ in range(6):
             *_, info = env.step(np.array([0.0, 0.5]))  # turn on the spot: never collides
             poses.append(info["true_pose"])
-        runs.append((scatterers, np.array(poses), pert["kidnapping"].kidnap_frame))
+            ranges.append(core.frames[0].detections.range_m)
+        sensed = (np.concatenate(ranges), np.array(odometry))
+        runs.append((scatterers, np.array(poses), pert["kidnapping"].kidnap_frame, sensed))
         env.close()
-    (s1, p1, k1), (s2, p2, k2) = runs
+    (s1, p1, k1, sensed1), (s2, p2, k2, sensed2) = runs
     assert len(s1) > 0
     np.testing.assert_array_equal(s1, s2)
     assert k1 == k2 == 3
     assert np.linalg.norm(p1[2, :2] - p1[1, :2]) > 2.0  # the put-down happened
     np.testing.assert_array_equal(p1, p2)
+    assert len(sensed1[0]) > 0
+    for a, b in zip(sensed1, sensed2):
+        np.testing.assert_array_equal(a, b)
