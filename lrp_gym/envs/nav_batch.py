@@ -8,9 +8,9 @@ one radar frame per robot. ``LRPRadarNavEnv`` is a batch of one; the vector env
 (:mod:`lrp_gym.envs.vector_env`) and the Stable-Baselines3 adapter (:mod:`lrp_gym.envs.sb3`)
 are batches of N.
 
-Every random draw of robot ``i`` comes from robot ``i``'s own generator, in the same order as a
-batch of one would make them: robot ``i`` of a batch reset with seed ``s`` follows exactly the
-trajectory of a single env reset with seed ``s``, whatever the other robots do.
+Every random draw of robot ``i`` comes from robot ``i``'s own generator (or a child of it spawned
+at reset), in the same order as a batch of one would make them: robot ``i`` of a batch reset
+with seed ``s`` follows exactly the trajectory of a single env reset with seed ``s``.
 """
 
 from __future__ import annotations
