@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+
 from lrp_gym.config import LocalizationConfig, ScenarioConfig
 from lrp_gym.localization.amcl import Amcl
 from lrp_gym.localization.grid import GridFilter
@@ -37,7 +39,10 @@ def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
     """The link budget of ``sensor`` for the localiser of scenario ``cfg``; surveyed
     (:meth:`RadarLink.surveyed`) when ``localization.detection_survey_poses`` asks for it and
     the world needs a visibility model (the survey calibrates its per-reflector
-    probabilities; a world whose reflectors are detected everywhere has none); with the
+    probabilities) or the survey finds a reflector delivered less often than
+    ``localization.detection_probability`` (its link budget may detect it everywhere, yet
+    the room's stronger returns at similar ranges mask it: spheres among the ceiling's
+    edges, docs/trust.md, session 28); with the
     ghosts weighted by the return-mix survey when ``localization.return_mix_survey_poses``
     asks for one and ``localization.ghost_weights`` is ``surveyed`` (in every room: unlike
     the mixture's shares, the weights only say which ghosts the radar returns)."""
@@ -48,10 +53,11 @@ def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
         link = link.with_ghost_weights(mix.ghost_row_weights(), mix.ghost_row_reflector)
     if loc.detection_survey_poses == 0 or not loc.reflector_visibility:
         return link
-    if not ReflectorVisibility.of(sensor.world, link).needed():
-        return link
-    rate = lrp_detection_rate(cfg, loc.detection_survey_poses, seed=0)
-    return link.surveyed(rate.per_lrp_in_view_rate, loc.detection_probability)
+    surveyed = link.surveyed(_delivery_survey(cfg), loc.detection_probability)
+    if ReflectorVisibility.of(sensor.world, link).needed() or np.any(surveyed.delivery < 1.0):
+        return surveyed
+    # Delivered as often as the likelihood expects, from everywhere: the plain model.
+    return link
 
 
 def measured_mixture(cfg: ScenarioConfig) -> LocalizationConfig:
@@ -84,6 +90,20 @@ def _ghost_survey(cfg: ScenarioConfig) -> ReturnMix | None:
     return mix if mix.map_return_probabilities()[1] > loc.ghost_probability else None
 
 
+#: Delivery rates in view (M,) per survey inputs (:func:`_delivery_survey`).
+_DELIVERY: dict[str, np.ndarray] = {}
+
+
+def _delivery_survey(cfg: ScenarioConfig) -> np.ndarray:
+    """Each reflector's delivered rate in view (:func:`lrp_detection_rate`, the survey's
+    ``detection_survey_poses`` frames), computed once per process per survey inputs."""
+    key = _survey_key(cfg, cfg.localization.detection_survey_poses)
+    if key not in _DELIVERY:
+        rate = lrp_detection_rate(cfg, cfg.localization.detection_survey_poses, seed=0)
+        _DELIVERY[key] = rate.per_lrp_in_view_rate
+    return _DELIVERY[key]
+
+
 #: Return-mix surveys per survey inputs: every env of a scenario (each test, each
 #: evaluation) would otherwise repeat the same seeded frames.
 _MIXTURES: dict[str, ReturnMix] = {}
@@ -92,17 +112,13 @@ _MIXTURES: dict[str, ReturnMix] = {}
 def _survey(cfg: ScenarioConfig) -> ReturnMix:
     """:func:`return_mix` of ``cfg``, computed once per process for the parts of the scenario
     it reads."""
-    key = json.dumps(
-        [
-            cfg.room.model_dump(mode="json"),
-            cfg.reflectors.model_dump(mode="json"),
-            cfg.radar.model_dump(mode="json"),
-            cfg.tracking.model_dump(mode="json"),
-            cfg.robot.model_dump(mode="json"),
-            cfg.localization.return_mix_survey_poses,
-        ],
-        sort_keys=True,
-    )
+    key = _survey_key(cfg, cfg.localization.return_mix_survey_poses)
     if key not in _MIXTURES:
         _MIXTURES[key] = return_mix(cfg, cfg.localization.return_mix_survey_poses, seed=0)
     return _MIXTURES[key]
+
+
+def _survey_key(cfg: ScenarioConfig, n_poses: int) -> str:
+    """The parts of ``cfg`` a radar survey of ``n_poses`` frames reads, as a cache key."""
+    parts = [cfg.room, cfg.reflectors, cfg.radar, cfg.tracking, cfg.robot]
+    return json.dumps([p.model_dump(mode="json") for p in parts] + [n_poses], sort_keys=True)
