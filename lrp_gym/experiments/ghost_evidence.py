@@ -16,6 +16,7 @@ import numpy as np
 from lrp_gym.config import ScenarioConfig
 from lrp_gym.localization.factory import measured_mixture, radar_link
 from lrp_gym.localization.likelihood import FingerprintModel
+from lrp_gym.localization.visibility import RadarLink
 from lrp_gym.radar.delivery_rate import random_poses
 from lrp_gym.radar.sensor import RadarSensor
 from lrp_gym.tracking.fingerprint import Fingerprint
@@ -49,14 +50,22 @@ def held_out_evidence(cfg: ScenarioConfig, frames: int = 40, seed: int = 99) -> 
     """:class:`GhostEvidence` of scenario ``cfg`` over ``frames`` radar frames at random free
     poses (``seed``: the poses and the noise; the survey's is 0). ``cfg`` needs surveyed
     weights (a radar link with ``ghost_weights``)."""
-    world = World.from_config(cfg)
-    sensor = RadarSensor(world, cfg.radar)
-    link = radar_link(cfg, sensor)
+    link = radar_link(cfg, RadarSensor(World.from_config(cfg), cfg.radar))
     if link.ghost_weights is None:
         raise ValueError(f"{cfg.name}: no surveyed ghost weights (localization.ghost_weights)")
+    return held_out_margins(cfg, (link, replace(link, ghost_weights=None)), frames, seed)
+
+
+def held_out_margins(
+    cfg: ScenarioConfig, links: tuple[RadarLink, RadarLink], frames: int = 40, seed: int = 99
+) -> GhostEvidence:
+    """:class:`GhostEvidence` of two localiser models of ``cfg`` that differ in their radar
+    ``links`` (the first in place of the surveyed weights, the second of equal ones), over
+    ``frames`` held-out frames at random free poses (``seed``)."""
+    world = World.from_config(cfg)
+    sensor = RadarSensor(world, cfg.radar)
     loc = measured_mixture(cfg)
-    equal = replace(link, ghost_weights=None)
-    models = [FingerprintModel.for_world(world, loc, lk) for lk in (link, equal)]
+    models = [FingerprintModel.for_world(world, loc, lk) for lk in links]
     classifier = LrpTracker.from_world(world, cfg.tracking).classifier
     rng = np.random.default_rng(seed)
     poses, vels = random_poses(world, frames, rng, cfg.robot.radius_m, cfg.robot.max_speed_mps)
