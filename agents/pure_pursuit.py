@@ -8,9 +8,9 @@ curvature (slow in sharp bends), an approach limit near the goal (do not oversho
 tolerance within one frame), and an uncertainty limit (creep while the pose estimate is spread
 out). While the heading is unknown the bearing to any target is meaningless, so the robot creeps
 straight ahead: consistent motion is what lets the particle filter resolve the heading (a turn
-on the spot shows the radar nothing new). With ``avoid_walls_when_unsure`` and the room
-(:meth:`PurePursuitPolicy.from_env`) it creeps only where the floor ahead of the *estimated*
-pose is free for a few steps, and turns on the spot where it is not (off by default). When
+on the spot shows the radar nothing new). Given the room (:meth:`PurePursuitPolicy.from_env`)
+it creeps only where the floor ahead of the *estimated* pose is free for a few steps, and
+turns on the spot where it is not (``avoid_walls_when_unsure``, on by default). When
 the lookahead point lies far to the side or behind, the robot turns on the spot. At its
 estimated goal in an episode that goes on (the env ends it when the true pose arrives), the
 estimate is wrong: the robot creeps on, as while the heading is unknown, to show the filter
@@ -34,10 +34,6 @@ from lrp_gym.world.room import Room
 #: While the heading is unknown, a creep step is taken only where the floor ahead of the
 #: estimated pose is free for this many steps (4 x 7.5 cm at the default creep speed).
 CREEP_LOOKAHEAD_STEPS = 4
-
-#: Curvatures (1/m) of the creep arcs tried, straightest first, left before right: radii
-#: down to 0.25 m, which turn a creep of :data:`CREEP_LOOKAHEAD_STEPS` steps by up to 70 deg.
-CREEP_CURVATURES = (0.0, 1.0, -1.0, 2.0, -2.0, 4.0, -4.0)
 
 #: :meth:`PurePursuitPolicy.from_env` puts ``arrived_m`` at this share of the goal tolerance:
 #: deep enough inside that an estimate a few cm off does not trigger it.
@@ -81,19 +77,17 @@ class PurePursuitConfig:
     turn_gain : float
         Turn rate per radian of bearing when turning on the spot (1/s).
     avoid_walls_when_unsure : bool
-        Off by default. On: while the heading is unknown, creep only where the floor ahead of
-        the estimated pose is free (``creep_margin_m``), and turn on the spot elsewhere. It
-        removed nearly every crash of the patrol matrix but costs evidence (turns weigh
-        nothing) and made the default task under clutter more often confidently wrong
-        (docs/trust.md, "The crashes were blind creeps").
+        On by default (with a room): while the heading is unknown, creep only where the floor
+        ahead of the estimated pose is free (``creep_margin_m``), and turn on the spot
+        elsewhere. Off: creep blind. It removes most crashes of the patrols (kidnap put-downs
+        facing a wall, clutter); sessions 18 and 26 kept it off because the turns, which
+        weigh nothing, made the default task under clutter more often confidently wrong, which
+        the localiser of session 28 no longer shows (docs/trust.md, session 28).
     creep_margin_m : float
         With ``avoid_walls_when_unsure``: the robot creeps only where its disc, widened by this
         margin, stays clear of walls and obstacles for :data:`CREEP_LOOKAHEAD_STEPS` creep steps
         ahead of the estimated pose, and turns on the spot elsewhere. Needs the room
         (:meth:`from_env`).
-    creep_arcs : bool
-        With ``avoid_walls_when_unsure``: where the floor straight ahead is not free, creep
-        along the straightest free arc (radius down to 0.25 m) before turning on the spot.
     arrived_m : float
         The env ends an episode when the *true* pose reaches the goal. An estimate within this
         distance of the goal, with only the goal left among the upcoming waypoints, in an
@@ -120,9 +114,8 @@ class PurePursuitConfig:
     min_confidence: float = 0.9
     turn_in_place_rad: float = 1.2
     turn_gain: float = 3.0
-    avoid_walls_when_unsure: bool = False
+    avoid_walls_when_unsure: bool = True
     creep_margin_m: float = 0.05
-    creep_arcs: bool = False
     arrived_m: float = 0.0
 
 
@@ -171,17 +164,6 @@ def parse_options(items: Sequence[str]) -> dict[str, float | bool]:
             raise ValueError(f"{item!r}: {key} must be a finite number >= 0, got {text!r}")
         out[key] = value
     return out
-
-
-def arc_points(xy: np.ndarray, theta: float, curvature: float, s_m: np.ndarray) -> np.ndarray:
-    """Positions (K, 2) after driving arc lengths ``s_m`` (K,) from ``xy`` heading ``theta``
-    on a circle of ``curvature`` (1/m, positive to the left; 0 is straight)."""
-    if abs(curvature) < 1e-9:
-        return xy + s_m[:, None] * np.array([np.cos(theta), np.sin(theta)])
-    turn = theta + curvature * s_m
-    dx = (np.sin(turn) - np.sin(theta)) / curvature
-    dy = (np.cos(theta) - np.cos(turn)) / curvature
-    return xy + np.stack([dx, dy], axis=-1)
 
 
 def lookahead_point(points: np.ndarray, distance_m: float) -> np.ndarray:
@@ -320,16 +302,14 @@ class PurePursuitPolicy:
         if self.room is None or step_m <= 0.0:
             return c.creep_speed_mps, 0.0
         xy = np.asarray(position, float) * self.room.size_m[:2]
-        theta = float(np.arctan2(heading[1], heading[0]))
+        norm = float(np.hypot(*heading))
+        ahead = np.asarray(heading, float) / norm if norm > 0.0 else np.array([1.0, 0.0])
         # A cushion of several steps: the estimate may be a few cm off, and a creep that only
         # just fits zig-zags into a corner one short step after each turn.
         reach = np.linspace(0.0, CREEP_LOOKAHEAD_STEPS * step_m, 4 * CREEP_LOOKAHEAD_STEPS + 1)
         clearance = self.robot_radius_m + c.creep_margin_m
-        # The straightest free arc: it keeps translating (the filter's evidence), where a turn
-        # on the spot shows the radar nothing new.
-        for curvature in CREEP_CURVATURES if c.creep_arcs else (0.0,):
-            if self.room.free(arc_points(xy, theta, curvature, reach), clearance).all():
-                return c.creep_speed_mps, c.creep_speed_mps * curvature
+        if np.all(self.room.free(xy + reach[:, None] * ahead, clearance)):
+            return c.creep_speed_mps, 0.0
         # Backing away instead (as much evidence as a step forward) was measured and crashed
         # as often as the blind creep: the heading that points ahead is unsure behind too.
         return 0.0, 0.5 * c.max_turn_rate_rps

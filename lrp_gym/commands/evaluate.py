@@ -56,7 +56,7 @@ def agent_settings_option() -> Any:
         "--agent-option",
         metavar="KEY=VALUE",
         help="A pure pursuit setting (pure-pursuit and oracle; a field of "
-        "agents.pure_pursuit.PurePursuitConfig), e.g. avoid_walls_when_unsure=true or "
+        "agents.pure_pursuit.PurePursuitConfig), e.g. avoid_walls_when_unsure=false or "
         "creep_speed_mps=0.2; repeatable.",
     )
 

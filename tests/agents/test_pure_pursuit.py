@@ -124,7 +124,7 @@ def test_a_blind_creep_stops_short_of_the_wall_ahead_of_the_estimate():
     )
     radius = 0.2
     path = WaypointPath.from_points(np.array([[1.0, 1.0], [4.0, 1.0]]))
-    blind = PurePursuitPolicy(PurePursuitConfig(avoid_walls_when_unsure=True), room, radius)
+    blind = PurePursuitPolicy(PurePursuitConfig(), room, radius)
     c = blind.config
     reach = CREEP_LOOKAHEAD_STEPS * c.creep_speed_mps * c.frame_period_s  # 0.3 m
     unsure = (0.5, 0.5, 2.0)
@@ -141,58 +141,13 @@ def test_a_blind_creep_stops_short_of_the_wall_ahead_of_the_estimate():
     # The same at the obstacle's face (x = 2), towards it and away from it.
     assert act([2.0 - edge - reach + 0.01, 2.5, 0.0]) == pytest.approx(turn)
     assert act([2.0 - edge - 0.01, 2.5, np.pi]) == pytest.approx(creep)
-    # Without the room, or with the option off (the default), the creep is blind, as before.
+    # Without the room, or with the option off, the creep is blind; the default avoids walls.
     assert act([edge + 0.01, 1.0, np.pi], PurePursuitPolicy()) == pytest.approx(creep)
+    off = PurePursuitConfig(avoid_walls_when_unsure=False)
+    blind_creep = PurePursuitPolicy(off, room=room, robot_radius_m=radius)
+    assert act([edge + reach - 0.01, 1.0, np.pi], blind_creep) == pytest.approx(creep)
     default = PurePursuitPolicy(room=room, robot_radius_m=radius)
-    assert act([edge + reach - 0.01, 1.0, np.pi], default) == pytest.approx(creep)
-
-
-def test_arc_points_lie_on_the_circle_of_the_curvature():
-    from agents.pure_pursuit import arc_points
-
-    s = np.array([0.0, np.pi / 2, np.pi])
-    # Curvature 1 from the origin heading +x: a quarter turn ends at (1, 1), a half at (0, 2).
-    np.testing.assert_allclose(
-        arc_points(np.zeros(2), 0.0, 1.0, s), [[0, 0], [1, 1], [0, 2]], atol=1e-12
-    )
-    np.testing.assert_allclose(arc_points(np.zeros(2), 0.0, -1.0, s)[1], [1, -1], atol=1e-12)
-    ahead = arc_points(np.array([1.0, 2.0]), np.pi / 2, 0.0, s)
-    np.testing.assert_allclose(ahead[:, 1] - 2.0, s)
-    np.testing.assert_allclose(ahead[:, 0], 1.0)
-    tiny = arc_points(np.zeros(2), 0.3, 1e-6, s)  # the straight limit of a wide circle
-    np.testing.assert_allclose(tiny, arc_points(np.zeros(2), 0.3, 0.0, s), atol=1e-5)
-
-
-def test_creep_arcs_bend_away_from_a_wall_ahead_and_turn_only_in_a_corner():
-    """With ``creep_arcs`` a blocked straight creep becomes the straightest free arc (the
-    robot keeps moving, which the filter needs); a turn on the spot is left for a corner."""
-    from lrp_gym.world.room import Room
-
-    room = Room(size_m=np.array([5.0, 5.0, 4.0]))
-    radius = 0.2
-    path = WaypointPath.from_points(np.array([[1.0, 1.0], [4.0, 1.0]]))
-    cfg = PurePursuitConfig(avoid_walls_when_unsure=True, creep_arcs=True)
-    pol = PurePursuitPolicy(cfg, room, radius)
-    c = pol.config
-
-    def act(pose):
-        obs = _obs(np.array(pose, float), path, std=(0.5, 0.5, 2.0), converged=False)
-        return pol.control(obs)
-
-    creep, turn = (c.creep_speed_mps, 0.0), (0.0, 0.5 * c.max_turn_rate_rps)
-    assert act([2.5, 2.5, 0.0]) == pytest.approx(creep)  # in the open: straight
-    # Heading up and left at 45 deg, 0.4 m from the wall x = 0: straight ahead, and every arc
-    # to the left, reach the wall within the lookahead; the right-hand arc of radius 0.5 m
-    # (curvature -2) bends along the wall and stays clear, the wider one (-1) does not.
-    v, w = act([0.4, 2.5, 3 * np.pi / 4])
-    assert (v, w) == pytest.approx((c.creep_speed_mps, -2.0 * c.creep_speed_mps))
-    # Head-on, no arc turns away in time: a turn on the spot.
-    assert act([0.4, 2.5, np.pi]) == pytest.approx(turn)
-    # Into a corner: turn on the spot.
-    assert act([0.3, 0.3, -3 * np.pi / 4]) == pytest.approx(turn)
-    # The option off: the turn on the spot as before where an arc would have been free.
-    pol.config = PurePursuitConfig(avoid_walls_when_unsure=True)
-    assert act([0.4, 2.5, 3 * np.pi / 4]) == pytest.approx(turn)
+    assert act([edge + reach - 0.01, 1.0, np.pi], default) == pytest.approx(turn)
 
 
 def test_predict_scales_a_reverse_speed_by_the_reverse_limit():
