@@ -89,11 +89,11 @@ class LocalizationConfig(Strict):
     )
     detection_survey_poses: Annotated[int, Field(ge=0)] = Field(
         default=200,
-        description="with reflector_visibility, in rooms that need it: poses of a calibration "
-        "survey (radar frames at random free poses, fixed seed) that measures how often the "
-        "radar delivers each reflector in view; a reflector delivered less often than "
-        "detection_probability gets its measured rate instead (never more: misses repeat "
-        "along the path); 0: no survey",
+        description="with reflector_visibility: poses of a calibration survey (radar frames "
+        "at random free poses, fixed seed) that measures how often the radar delivers each "
+        "reflector in view; a reflector delivered less often than detection_probability gets "
+        "its measured rate instead (never more: misses repeat along the path), also where its "
+        "link budget detects it everywhere (masked by stronger returns); 0: no survey",
     )
     return_mix_survey_poses: Annotated[int, Field(ge=0)] = Field(
         default=200,

@@ -59,9 +59,10 @@ def held_out_evidence(cfg: ScenarioConfig, frames: int = 40, seed: int = 99) -> 
 def held_out_margins(
     cfg: ScenarioConfig, links: tuple[RadarLink, RadarLink], frames: int = 40, seed: int = 99
 ) -> GhostEvidence:
-    """:class:`GhostEvidence` of two localiser models of ``cfg`` that differ in their radar
-    ``links`` (the first in place of the surveyed weights, the second of equal ones), over
-    ``frames`` held-out frames at random free poses (``seed``)."""
+    """:class:`GhostEvidence` of two localiser models of ``cfg`` that differ only in their
+    radar ``links`` (the gain is the first's log-likelihood at the truth minus the second's;
+    the margins are per model, in that order), over ``frames`` held-out frames at random
+    free poses (``seed``)."""
     world = World.from_config(cfg)
     sensor = RadarSensor(world, cfg.radar)
     loc = measured_mixture(cfg)

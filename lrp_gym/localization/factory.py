@@ -100,7 +100,7 @@ def _delivery_survey(cfg: ScenarioConfig) -> np.ndarray:
     key = _survey_key(cfg, cfg.localization.detection_survey_poses)
     if key not in _DELIVERY:
         rate = lrp_detection_rate(cfg, cfg.localization.detection_survey_poses, seed=0)
-        _DELIVERY[key] = rate.per_lrp_in_view_rate
+        _DELIVERY[key] = np.asarray(rate.per_lrp_in_view_rate, dtype=float)
     return _DELIVERY[key]
 
 
