@@ -124,13 +124,13 @@ def test_a_blind_creep_stops_short_of_the_wall_ahead_of_the_estimate():
     )
     radius = 0.2
     path = WaypointPath.from_points(np.array([[1.0, 1.0], [4.0, 1.0]]))
-    blind = PurePursuitPolicy(PurePursuitConfig(), room, radius)
-    c = blind.config
+    wary = PurePursuitPolicy(PurePursuitConfig(), room, radius)
+    c = wary.config
     reach = CREEP_LOOKAHEAD_STEPS * c.creep_speed_mps * c.frame_period_s  # 0.3 m
     unsure = (0.5, 0.5, 2.0)
     creep, turn = (c.creep_speed_mps, 0.0), (0.0, 0.5 * c.max_turn_rate_rps)
 
-    def act(pose, pol=blind):
+    def act(pose, pol=wary):
         return pol.control(_obs(np.array(pose, float), path, std=unsure, converged=False))
 
     edge = radius + c.creep_margin_m  # nearest the disc's centre may come to a wall

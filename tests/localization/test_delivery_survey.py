@@ -44,8 +44,8 @@ def test_a_reflector_delivered_rarely_gets_the_visibility_model(spheres):
     np.testing.assert_allclose(link.delivery, np.maximum(rates, 0.05) / p_d)
     model = FingerprintModel.for_world(world, measured_mixture(cfg), link)
     assert model.visibility is not None
-    # What the likelihood expects of each sphere from anywhere: P_D times its share of the
-    # surveyed rate, not P_D.
+    # Each sphere's factor from anywhere in view is its share of P_D that the survey found
+    # (the likelihood expects it with P_D times this: the surveyed rate, not P_D).
     xy = np.array([[4.0, 5.0], [2.0, 2.0], [7.0, 9.0]])
     expected = model.visibility.exact.detection_probability(xy)
     np.testing.assert_allclose(expected, np.repeat(link.delivery[:, None], 3, axis=1), rtol=0.01)
