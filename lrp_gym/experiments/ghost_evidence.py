@@ -1,10 +1,11 @@
-"""Do the surveyed ghost weights explain new radar frames better than equal ones?
+"""Does a surveyed part of the measurement model explain new radar frames better?
 
-Held out from the return-mix survey (other poses, other noise), each frame's RCS-window
-distances are weighed by the localisers' likelihood twice: with the radar link's surveyed
-ghost weights and with equal ones. A better model of the ghosts makes the frames more likely at
-the true position and sets the true position further above wrong ones (docs/trust.md,
-session 27).
+Held out from the surveys (other poses, other noise), each frame's RCS-window distances are
+weighed by the localisers' likelihood twice, with two radar links: the surveyed ghost weights
+against equal ones (:func:`held_out_evidence`, docs/trust.md session 27), or any pair
+(:func:`held_out_margins`; the surveyed delivery rates against none, session 28). A better
+model makes the frames more likely at the true position and sets the true position further
+above wrong ones.
 """
 
 from __future__ import annotations
@@ -36,10 +37,11 @@ class GhostEvidence:
     Attributes
     ----------
     gain_nats : ndarray (F,)
-        Log-likelihood at the true position, surveyed weights minus equal ones.
+        Log-likelihood at the true position, the first link's model minus the second's
+        (surveyed ghost weights minus equal ones in :func:`held_out_evidence`).
     margin_nats : ndarray (F, 2)
-        The true position's log-likelihood minus the best wrong position's, with the
-        surveyed weights (column 0) and with equal ones (column 1).
+        The true position's log-likelihood minus the best wrong position's, under the first
+        link's model (column 0) and the second's (column 1).
     """
 
     gain_nats: np.ndarray

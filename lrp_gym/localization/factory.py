@@ -36,16 +36,17 @@ def make_localizer(
 
 
 def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
-    """The link budget of ``sensor`` for the localiser of scenario ``cfg``; surveyed
-    (:meth:`RadarLink.surveyed`) when ``localization.detection_survey_poses`` asks for it and
-    the world needs a visibility model (the survey calibrates its per-reflector
-    probabilities) or the survey finds a reflector delivered less often than
-    ``localization.detection_probability`` (its link budget may detect it everywhere, yet
-    the room's stronger returns at similar ranges mask it: spheres among the ceiling's
-    edges, docs/trust.md, session 28); with the
-    ghosts weighted by the return-mix survey when ``localization.return_mix_survey_poses``
-    asks for one and ``localization.ghost_weights`` is ``surveyed`` (in every room: unlike
-    the mixture's shares, the weights only say which ghosts the radar returns)."""
+    """The link budget of ``sensor`` for the localiser of scenario ``cfg``.
+
+    Surveyed (:meth:`RadarLink.surveyed`) when ``localization.detection_survey_poses`` asks
+    for it and either the survey finds a reflector delivered less often than
+    ``localization.detection_probability`` (even one its link budget detects everywhere: the
+    room's stronger returns at similar ranges mask it, spheres among the ceiling's edges,
+    docs/trust.md session 28) or the world needs a visibility model (the survey calibrates
+    it). With the ghosts weighted by the return-mix survey when
+    ``localization.return_mix_survey_poses`` asks for one and ``localization.ghost_weights``
+    is ``surveyed`` (in every room: unlike the mixture's shares, the weights only say which
+    ghosts the radar returns)."""
     link = RadarLink.from_sensor(sensor)
     loc = cfg.localization
     mix = _survey(cfg) if loc.return_mix_survey_poses > 0 else None
@@ -54,7 +55,8 @@ def radar_link(cfg: ScenarioConfig, sensor: RadarSensor) -> RadarLink:
     if loc.detection_survey_poses == 0 or not loc.reflector_visibility:
         return link
     surveyed = link.surveyed(_delivery_survey(cfg), loc.detection_probability)
-    if ReflectorVisibility.of(sensor.world, link).needed() or np.any(surveyed.delivery < 1.0):
+    # The delivery test first: it is free, the floor-grid test of needed() is not.
+    if np.any(surveyed.delivery < 1.0) or ReflectorVisibility.of(sensor.world, link).needed():
         return surveyed
     # Delivered as often as the likelihood expects, from everywhere: the plain model.
     return link

@@ -11,7 +11,7 @@ import pytest
 
 from lrp_gym.config import load_scenario
 from lrp_gym.experiments.ghost_evidence import held_out_margins
-from lrp_gym.experiments.room_episodes import generated_room
+from lrp_gym.experiments.scenarios import generated_room
 from lrp_gym.localization.factory import measured_mixture, radar_link
 from lrp_gym.localization.likelihood import FingerprintModel
 from lrp_gym.localization.visibility import RadarLink, ReflectorVisibility
